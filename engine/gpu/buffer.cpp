@@ -1,0 +1,169 @@
+#include "engine/gpu/buffer.hpp"
+
+#include <cstring>
+
+#include "engine/gpu/context_impl.hpp"
+
+namespace nf::gpu {
+namespace {
+
+struct Allocation {
+  VkBuffer buffer = VK_NULL_HANDLE;
+  VkDeviceMemory memory = VK_NULL_HANDLE;
+  std::uint64_t bytes = 0;
+};
+
+Allocation allocate(Context::Impl& m, std::uint64_t bytes, std::uint32_t memory_type, const std::string& name) {
+  Allocation a;
+  // Vulkan forbids empty buffers; an empty nf buffer still owns a small allocation.
+  a.bytes = std::max<std::uint64_t>(bytes, 16);
+  a.bytes = (a.bytes + 3) & ~std::uint64_t(3);  // vkCmdFillBuffer works on whole words
+  VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+  info.size = a.bytes;
+  info.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+  info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  NF_VK_CHECK(vkCreateBuffer(m.device, &info, nullptr, &a.buffer));
+  VkMemoryRequirements req;
+  vkGetBufferMemoryRequirements(m.device, a.buffer, &req);
+  if (!(req.memoryTypeBits & (1u << memory_type))) {
+    vkDestroyBuffer(m.device, a.buffer, nullptr);
+    throw DeviceError("buffer '" + name + "': the chosen memory type cannot hold storage buffers on this device");
+  }
+  VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  alloc.allocationSize = req.size;
+  alloc.memoryTypeIndex = memory_type;
+  const VkResult r = vkAllocateMemory(m.device, &alloc, nullptr, &a.memory);
+  if (r != VK_SUCCESS) {
+    vkDestroyBuffer(m.device, a.buffer, nullptr);
+    if (r == VK_ERROR_OUT_OF_DEVICE_MEMORY || r == VK_ERROR_OUT_OF_HOST_MEMORY)
+      throw DeviceError("buffer '" + name + "': out of memory allocating " + std::to_string(req.size) + " bytes (" +
+                        detail::result_name(r) + "); nf_gpu holds " + std::to_string(m.allocated_bytes.load()) +
+                        " bytes already");
+    NF_VK_CHECK(r);
+  }
+  NF_VK_CHECK(vkBindBufferMemory(m.device, a.buffer, a.memory, 0));
+  m.name_object(VK_OBJECT_TYPE_BUFFER, std::uint64_t(a.buffer), name);
+  m.note_allocation(std::int64_t(req.size));
+  a.bytes = req.size;
+  return a;
+}
+
+void free_allocation(Context::Impl& m, Allocation& a) {
+  if (a.buffer) vkDestroyBuffer(m.device, a.buffer, nullptr);
+  if (a.memory) {
+    vkFreeMemory(m.device, a.memory, nullptr);
+    m.note_allocation(-std::int64_t(a.bytes));
+  }
+  a = {};
+}
+
+// A host-visible buffer for one transfer; freed when it goes out of scope.
+struct Staging {
+  Context::Impl& m;
+  Allocation a;
+  void* data = nullptr;
+  Staging(Context::Impl& impl, std::uint64_t bytes) : m(impl), a(allocate(impl, bytes, impl.staging_memory_type, "staging")) {
+    NF_VK_CHECK(vkMapMemory(m.device, a.memory, 0, VK_WHOLE_SIZE, 0, &data));
+  }
+  ~Staging() { free_allocation(m, a); }
+  Staging(const Staging&) = delete;
+  Staging& operator=(const Staging&) = delete;
+};
+
+}  // namespace
+
+RawBuffer::RawBuffer(Context& context, std::uint64_t bytes, std::string name)
+    : context_(&context), bytes_(bytes), name_(std::move(name)) {
+  Context::Impl& m = context.impl();
+  const DeviceLimits& lim = m.info.limits;
+  if (bytes > lim.max_allocation_size)
+    throw DeviceError("buffer '" + name_ + "' needs " + std::to_string(bytes) + " bytes but device '" + m.info.name +
+                      "' allows at most " + std::to_string(lim.max_allocation_size) +
+                      " per allocation; split the data or lower its size");
+  const bool mapped = m.mapped_memory_type != ~0u;
+  Allocation a = allocate(m, bytes, mapped ? m.mapped_memory_type : m.device_memory_type, name_);
+  handles_ = new Handles{a.buffer, a.memory, a.bytes};
+  if (mapped) {
+    try {
+      NF_VK_CHECK(vkMapMemory(m.device, a.memory, 0, VK_WHOLE_SIZE, 0, &mapped_));
+    } catch (...) {
+      release();
+      throw;
+    }
+  }
+}
+
+RawBuffer::~RawBuffer() { release(); }
+
+void RawBuffer::release() {
+  if (!handles_) return;
+  Context::Impl& m = context_->impl();
+  if (mapped_) vkUnmapMemory(m.device, handles_->memory);
+  Allocation a{handles_->buffer, handles_->memory, handles_->allocation_bytes};
+  free_allocation(m, a);
+  delete handles_;
+  handles_ = nullptr;
+  mapped_ = nullptr;
+}
+
+RawBuffer::RawBuffer(RawBuffer&& other) noexcept
+    : context_(other.context_), bytes_(other.bytes_), name_(std::move(other.name_)),
+      handles_(std::exchange(other.handles_, nullptr)), mapped_(std::exchange(other.mapped_, nullptr)) {}
+
+RawBuffer& RawBuffer::operator=(RawBuffer&& other) noexcept {
+  if (this != &other) {
+    release();
+    context_ = other.context_;
+    bytes_ = other.bytes_;
+    name_ = std::move(other.name_);
+    handles_ = std::exchange(other.handles_, nullptr);
+    mapped_ = std::exchange(other.mapped_, nullptr);
+  }
+  return *this;
+}
+
+BufferRange RawBuffer::range_bytes(std::uint64_t offset, std::uint64_t bytes) const {
+  if (offset + bytes > bytes_)
+    throw InternalError("range [" + std::to_string(offset) + ", " + std::to_string(offset + bytes) +
+                        ") lies outside buffer '" + name_ + "' of " + std::to_string(bytes_) + " bytes");
+  return {this, offset, bytes};
+}
+
+void RawBuffer::write_bytes(std::uint64_t offset, const void* data, std::uint64_t bytes) {
+  if (offset + bytes > bytes_) throw InternalError("write past the end of buffer '" + name_ + "'");
+  if (bytes == 0) return;
+  if (mapped_) {
+    std::memcpy(static_cast<char*>(mapped_) + offset, data, bytes);
+    return;
+  }
+  Context::Impl& m = context_->impl();
+  Staging staging(m, bytes);
+  std::memcpy(staging.data, data, bytes);
+  m.run_immediate([&](VkCommandBuffer cmd) {
+    VkBufferCopy region{0, offset, bytes};
+    vkCmdCopyBuffer(cmd, staging.a.buffer, handles_->buffer, 1, &region);
+  });
+}
+
+void RawBuffer::read_bytes(std::uint64_t offset, void* data, std::uint64_t bytes) const {
+  if (offset + bytes > bytes_) throw InternalError("read past the end of buffer '" + name_ + "'");
+  if (bytes == 0) return;
+  if (mapped_) {
+    std::memcpy(data, static_cast<const char*>(mapped_) + offset, bytes);
+    return;
+  }
+  Context::Impl& m = context_->impl();
+  Staging staging(m, bytes);
+  m.run_immediate([&](VkCommandBuffer cmd) {
+    VkBufferCopy region{offset, 0, bytes};
+    vkCmdCopyBuffer(cmd, handles_->buffer, staging.a.buffer, 1, &region);
+  });
+  std::memcpy(data, staging.data, bytes);
+}
+
+void RawBuffer::fill_u32(std::uint32_t value) {
+  Context::Impl& m = context_->impl();
+  m.run_immediate([&](VkCommandBuffer cmd) { vkCmdFillBuffer(cmd, handles_->buffer, 0, VK_WHOLE_SIZE, value); });
+}
+
+}  // namespace nf::gpu

@@ -1,0 +1,32 @@
+#pragma once
+// Splitting arrays into ranges a kernel binding may cover (maxStorageBufferRange, 128 MiB on
+// lavapipe), with every chunk starting on minStorageBufferOffsetAlignment.
+#include <algorithm>
+#include <cstdint>
+
+#include "engine/gpu/buffer.hpp"
+#include "engine/gpu/context.hpp"
+
+namespace nf::gpu {
+
+// Largest element count one binding may cover, a multiple of the offset alignment.
+inline std::uint64_t max_binding_elements(const Context& context, std::uint64_t element_bytes) {
+  const DeviceLimits& l = context.info().limits;
+  const std::uint64_t align = std::max<std::uint64_t>(l.min_storage_buffer_offset_alignment, element_bytes);
+  const std::uint64_t bytes = std::min<std::uint64_t>(l.max_storage_buffer_range, 1ull << 32) / align * align;
+  return bytes / element_bytes;
+}
+
+// The sub-range of `range` holding elements [first, first + count).
+inline BufferRange sub_range(BufferRange range, std::uint64_t element_bytes, std::uint64_t first, std::uint64_t count) {
+  return {range.buffer, range.offset + first * element_bytes, count * element_bytes};
+}
+
+// Workgroup size for the primitives: a multiple of the subgroup size, as nf_wg_rank() requires.
+inline std::uint32_t primitive_workgroup(const Context& context, std::uint32_t preferred) {
+  const std::uint32_t subgroup = std::max<std::uint32_t>(1, context.info().limits.subgroup_size);
+  const std::uint32_t wg = std::max(preferred, subgroup) / subgroup * subgroup;
+  return std::min(wg, context.info().limits.max_workgroup_size[0]);
+}
+
+}  // namespace nf::gpu

@@ -1,0 +1,91 @@
+#pragma once
+// Private to engine/gpu: the Vulkan state behind Context, Buffer, Kernel and Stream.
+#include <atomic>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "engine/gpu/buffer.hpp"
+#include "engine/gpu/context.hpp"
+#include "engine/gpu/kernel.hpp"
+#include "engine/gpu/vk_common.hpp"
+
+namespace nf::gpu {
+
+struct RawBuffer::Handles {
+  VkBuffer buffer = VK_NULL_HANDLE;
+  VkDeviceMemory memory = VK_NULL_HANDLE;
+  std::uint64_t allocation_bytes = 0;
+};
+
+struct Kernel::Handles {
+  VkDevice device = VK_NULL_HANDLE;
+  VkShaderModule module = VK_NULL_HANDLE;
+  VkPipeline pipeline = VK_NULL_HANDLE;
+};
+
+struct Context::Impl {
+  Context* owner = nullptr;
+  ContextOptions options;
+  VkInstance instance = VK_NULL_HANDLE;
+  VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
+  VkPhysicalDevice physical = VK_NULL_HANDLE;
+  VkDevice device = VK_NULL_HANDLE;
+  VkQueue queue = VK_NULL_HANDLE;
+  std::mutex queue_mutex;  // vkQueueSubmit needs external synchronisation
+  std::uint32_t queue_family = 0;
+  VkCommandPool command_pool = VK_NULL_HANDLE;
+  VkPipelineCache pipeline_cache = VK_NULL_HANDLE;
+
+  // One descriptor-set layout of `binding_slots` storage buffers shared by every kernel, and one
+  // pipeline layout with a push-constant range of `push_constant_bytes`.
+  VkDescriptorSetLayout set_layout = VK_NULL_HANDLE;
+  VkPipelineLayout pipeline_layout = VK_NULL_HANDLE;
+  std::uint32_t binding_slots = 0;
+  std::uint32_t push_constant_bytes = 0;
+
+  PFN_vkCmdPushDescriptorSetKHR push_descriptor = nullptr;
+  PFN_vkSetDebugUtilsObjectNameEXT set_object_name = nullptr;
+
+  VkPhysicalDeviceMemoryProperties memory_properties{};
+  std::uint32_t device_memory_type = ~0u;   // device-local
+  std::uint32_t mapped_memory_type = ~0u;   // device-local and host-visible/coherent, if tuning allows
+  std::uint32_t staging_memory_type = ~0u;  // host-visible/coherent
+
+  DeviceInfo info;
+  DeviceTuning tuning;
+
+  std::mutex kernels_mutex;
+  std::map<std::string, std::unique_ptr<Kernel>> kernels;
+
+  mutable std::mutex validation_mutex;
+  std::vector<std::string> validation_messages;
+
+  mutable std::mutex pass_mutex;
+  std::map<std::string, PassTotal> pass_totals;
+
+  std::atomic<std::uint64_t> allocated_bytes{0};
+  std::atomic<std::uint64_t> peak_bytes{0};
+
+  std::mutex scratch_mutex;
+  std::multimap<std::uint64_t, std::unique_ptr<RawBuffer>> free_scratch;  // by capacity
+  std::unique_ptr<RawBuffer> dummy;  // bound where a kernel's optional binding is unused
+
+  void destroy();  // releases every Vulkan object; safe on a half-built context
+  void name_object(VkObjectType type, std::uint64_t handle, const std::string& name) const;
+  // Records `record` into a one-shot command buffer, submits it and waits.
+  void run_immediate(const std::function<void(VkCommandBuffer)>& record);
+  std::unique_ptr<RawBuffer> acquire_scratch(std::uint64_t bytes);
+  void release_scratch(std::unique_ptr<RawBuffer> buffer);
+  void note_allocation(std::int64_t delta);
+};
+
+// Builds the description of one physical device (no logical device needed).
+DeviceInfo describe_device(VkPhysicalDevice device, std::uint32_t index);
+// Fills the tuning and info.quirks from the driver-quirk table and the options' env switches.
+void apply_quirks(DeviceInfo& info, DeviceTuning& tuning, const ContextOptions& options);
+
+}  // namespace nf::gpu

@@ -1,0 +1,50 @@
+// The driver-quirk table: behaviour keyed by VkDriverId, plus the env switches that force fallback
+// paths so CI exercises them on lavapipe.
+#include "engine/gpu/context_impl.hpp"
+
+namespace nf::gpu {
+namespace {
+
+struct Quirk {
+  VkDriverId driver;
+  const char* what;
+  void (*apply)(DeviceTuning&);
+};
+
+// CPU implementations share one heap between host and "device": mapping device memory avoids a
+// staging copy, and invocations are cheap next to dispatches, so each does more work.
+void cpu_device(DeviceTuning& t) {
+  t.mapped_device_buffers = true;
+  t.items_per_thread = 8;
+}
+
+const Quirk kQuirks[] = {
+    {VK_DRIVER_ID_MESA_LLVMPIPE, "lavapipe: CPU device, mapped buffers, 8 items per invocation", cpu_device},
+    {VK_DRIVER_ID_GOOGLE_SWIFTSHADER, "SwiftShader: CPU device, mapped buffers, 8 items per invocation", cpu_device},
+};
+
+}  // namespace
+
+void apply_quirks(DeviceInfo& info, DeviceTuning& tuning, const ContextOptions& options) {
+  tuning = DeviceTuning{};
+  // Integrated GPUs share memory with the host as well.
+  if (info.type == "integrated") tuning.mapped_device_buffers = true;
+  for (const Quirk& q : kQuirks) {
+    if (q.driver == static_cast<VkDriverId>(info.driver_id)) {
+      q.apply(tuning);
+      info.quirks.emplace_back(q.what);
+    }
+  }
+  tuning.use_push_descriptors = info.features.push_descriptors;
+  if (!info.features.push_descriptors) info.quirks.emplace_back("no VK_KHR_push_descriptor: descriptor pools");
+  if (options.force_descriptor_pool) {
+    tuning.use_push_descriptors = false;
+    info.quirks.emplace_back("NF_NO_PUSH_DESCRIPTORS: descriptor pools forced");
+  }
+  if (options.force_staging) {
+    tuning.mapped_device_buffers = false;
+    info.quirks.emplace_back("NF_FORCE_STAGING: staging copies forced");
+  }
+}
+
+}  // namespace nf::gpu

@@ -1,0 +1,167 @@
+#include "engine/gpu/spirv_reflect.hpp"
+
+#include <algorithm>
+#include <functional>
+#include <unordered_map>
+
+#include "engine/core/error.hpp"
+
+namespace nf::gpu {
+namespace {
+
+// SPIR-V opcodes and enums used here (stable across SPIR-V versions; spec section 3).
+enum : std::uint32_t {
+  OpCapability = 17, OpExecutionMode = 16, OpTypeBool = 20, OpTypeInt = 21, OpTypeFloat = 22,
+  OpTypeVector = 23, OpTypeMatrix = 24, OpTypeArray = 28, OpTypeStruct = 30, OpTypePointer = 32,
+  OpConstant = 43, OpSpecConstantTrue = 48, OpSpecConstantFalse = 49, OpSpecConstant = 50,
+  OpSpecConstantComposite = 51, OpVariable = 59, OpDecorate = 71, OpMemberDecorate = 72,
+  OpExecutionModeId = 331,
+  DecSpecId = 1, DecBuiltIn = 11, DecNonWritable = 24, DecNonReadable = 25, DecBinding = 33,
+  DecDescriptorSet = 34, DecOffset = 35, DecArrayStride = 6, DecMatrixStride = 7,
+  BuiltInWorkgroupSize = 25, ExecModeLocalSize = 17, ExecModeLocalSizeId = 38,
+  StorageUniform = 2, StoragePushConstant = 9, StorageStorageBuffer = 12,
+  CapFloat16 = 9, CapInt64 = 11, CapAtomicFloat32AddEXT = 6033,
+};
+
+struct Type {
+  std::uint32_t op = 0;
+  std::vector<std::uint32_t> operands;  // words after the result id
+};
+
+}  // namespace
+
+KernelLayout reflect_spirv(std::span<const std::uint32_t> words, const std::string& name) {
+  if (words.size() < 5 || words[0] != 0x07230203u)
+    throw InternalError("shader '" + name + "' is not a SPIR-V module (bad magic number)");
+  KernelLayout layout;
+  std::unordered_map<std::uint32_t, Type> types;
+  std::unordered_map<std::uint32_t, std::uint32_t> constants;       // id -> 32-bit value
+  std::unordered_map<std::uint32_t, std::uint32_t> spec_ids;        // id -> SpecId
+  std::unordered_map<std::uint32_t, std::uint32_t> bindings, sets;  // variable id -> value
+  std::unordered_map<std::uint32_t, bool> non_writable, non_readable;
+  std::unordered_map<std::uint64_t, std::uint32_t> member_offset;   // (struct << 32 | member) -> offset
+  std::unordered_map<std::uint32_t, std::uint32_t> array_stride;
+  std::unordered_map<std::uint64_t, std::uint32_t> matrix_stride;
+  std::unordered_map<std::uint32_t, std::vector<std::uint32_t>> spec_composites;
+  std::uint32_t workgroup_size_id = 0;
+  struct Var { std::uint32_t id, type, storage; };
+  std::vector<Var> variables;
+
+  for (std::size_t i = 5; i < words.size();) {
+    const std::uint32_t count = words[i] >> 16, op = words[i] & 0xffffu;
+    if (count == 0 || i + count > words.size()) throw InternalError("shader '" + name + "': truncated SPIR-V");
+    const std::uint32_t* w = &words[i];
+    switch (op) {
+      case OpCapability:
+        if (w[1] == CapAtomicFloat32AddEXT) layout.uses_float32_atomic_add = true;
+        if (w[1] == CapFloat16) layout.uses_float16 = true;
+        if (w[1] == CapInt64) layout.uses_int64 = true;
+        break;
+      case OpExecutionMode:
+        if (w[2] == ExecModeLocalSize) layout.local_size = {w[3], w[4], w[5]};
+        break;
+      case OpExecutionModeId:
+        if (w[2] == ExecModeLocalSizeId) throw InternalError("shader '" + name + "': LocalSizeId is not supported");
+        break;
+      case OpTypeBool: case OpTypeInt: case OpTypeFloat: case OpTypeVector: case OpTypeMatrix:
+      case OpTypeArray: case OpTypeStruct: case OpTypePointer:
+        types[w[1]] = Type{op, std::vector<std::uint32_t>(w + 2, w + count)};
+        break;
+      case OpConstant: case OpSpecConstant:
+        constants[w[2]] = w[3];
+        if (op == OpSpecConstant) spec_ids.try_emplace(w[2], 0xffffffffu);
+        break;
+      case OpSpecConstantTrue: case OpSpecConstantFalse:
+        constants[w[2]] = op == OpSpecConstantTrue;
+        spec_ids.try_emplace(w[2], 0xffffffffu);
+        break;
+      case OpSpecConstantComposite:
+        spec_composites[w[2]] = std::vector<std::uint32_t>(w + 3, w + count);
+        break;
+      case OpVariable:
+        variables.push_back({w[2], w[1], w[3]});
+        break;
+      case OpDecorate:
+        if (w[2] == DecBinding) bindings[w[1]] = w[3];
+        else if (w[2] == DecDescriptorSet) sets[w[1]] = w[3];
+        else if (w[2] == DecNonWritable) non_writable[w[1]] = true;
+        else if (w[2] == DecNonReadable) non_readable[w[1]] = true;
+        else if (w[2] == DecSpecId) spec_ids[w[1]] = w[3];
+        else if (w[2] == DecArrayStride) array_stride[w[1]] = w[3];
+        else if (w[2] == DecBuiltIn && w[3] == BuiltInWorkgroupSize) workgroup_size_id = w[1];
+        break;
+      case OpMemberDecorate:
+        if (w[3] == DecOffset) member_offset[(std::uint64_t(w[1]) << 32) | w[2]] = w[4];
+        else if (w[3] == DecMatrixStride) matrix_stride[(std::uint64_t(w[1]) << 32) | w[2]] = w[4];
+        else if (w[3] == DecNonWritable) non_writable[w[1]] = true;
+        else if (w[3] == DecNonReadable) non_readable[w[1]] = true;
+        break;
+      default:
+        break;
+    }
+    i += count;
+  }
+
+  for (const auto& [id, spec] : spec_ids)
+    if (spec != 0xffffffffu) layout.spec_defaults[spec] = constants[id];
+
+  // Workgroup size given by specialisation constants (layout(local_size_x_id = N) in GLSL).
+  if (workgroup_size_id) {
+    const auto it = spec_composites.find(workgroup_size_id);
+    if (it != spec_composites.end() && it->second.size() == 3) {
+      for (int axis = 0; axis < 3; ++axis) {
+        const std::uint32_t c = it->second[axis];
+        layout.local_size[axis] = constants[c];
+        const auto s = spec_ids.find(c);
+        if (s != spec_ids.end() && s->second != 0xffffffffu) layout.local_size_spec_id[axis] = std::int32_t(s->second);
+      }
+    }
+  }
+
+  // Byte size of a type inside an explicitly laid-out block.
+  std::function<std::uint32_t(std::uint32_t, std::uint32_t, std::uint32_t)> size_of =
+      [&](std::uint32_t type_id, std::uint32_t parent, std::uint32_t member) -> std::uint32_t {
+    const auto t = types.find(type_id);
+    if (t == types.end()) throw InternalError("shader '" + name + "': unknown type in push constants");
+    const auto& o = t->second.operands;
+    switch (t->second.op) {
+      case OpTypeBool: return 4;
+      case OpTypeInt: case OpTypeFloat: return o[0] / 8;
+      case OpTypeVector: return o[1] * size_of(o[0], 0, 0);
+      case OpTypeMatrix: return o[1] * matrix_stride[(std::uint64_t(parent) << 32) | member];
+      case OpTypeArray: return constants[o[1]] * array_stride[type_id];
+      case OpTypeStruct: {
+        std::uint32_t end = 0;
+        for (std::uint32_t m = 0; m < o.size(); ++m)
+          end = std::max(end, member_offset[(std::uint64_t(type_id) << 32) | m] + size_of(o[m], type_id, m));
+        return end;
+      }
+      default: throw InternalError("shader '" + name + "': unsupported type in push constants");
+    }
+  };
+
+  for (const Var& v : variables) {
+    const auto ptr = types.find(v.type);
+    if (ptr == types.end() || ptr->second.op != OpTypePointer) continue;
+    const std::uint32_t pointee = ptr->second.operands[1];
+    if (v.storage == StoragePushConstant) {
+      layout.push_constant_size = size_of(pointee, 0, 0);
+    } else if (v.storage == StorageStorageBuffer || v.storage == StorageUniform) {
+      if (!bindings.count(v.id)) continue;
+      if (sets[v.id] != 0) throw InternalError("shader '" + name + "': only descriptor set 0 is supported");
+      // Access qualifiers sit on the variable or on every member of the block type.
+      const bool ro = non_writable[v.id] || non_writable[pointee];
+      const bool wo = non_readable[v.id] || non_readable[pointee];
+      layout.bindings.push_back({bindings[v.id], !wo, !ro});
+    }
+  }
+  std::sort(layout.bindings.begin(), layout.bindings.end(),
+            [](const BindingInfo& a, const BindingInfo& b) { return a.binding < b.binding; });
+  for (std::size_t i = 0; i < layout.bindings.size(); ++i)
+    if (layout.bindings[i].binding != i)
+      throw InternalError("shader '" + name + "': bindings must be 0..N-1 without gaps (missing binding " +
+                          std::to_string(i) + ")");
+  return layout;
+}
+
+}  // namespace nf::gpu

@@ -1,0 +1,332 @@
+#include "engine/gpu/stream.hpp"
+
+#include <algorithm>
+
+#include "engine/core/error.hpp"
+#include "engine/core/log.hpp"
+#include "engine/gpu/context_impl.hpp"
+
+namespace nf::gpu {
+namespace {
+
+constexpr std::uint32_t kMaxTimestamps = 1024;
+constexpr std::uint64_t kWaitTimeoutNs = 600ull * 1000 * 1000 * 1000;
+constexpr std::uint32_t kSetsPerPool = 256;
+
+struct Access {
+  VkBuffer buffer;
+  std::uint64_t begin, end;
+  bool write;
+};
+
+struct OpenPass {
+  std::string name;
+  std::uint32_t begin_query;
+  std::uint32_t end_query = ~0u;
+};
+
+}  // namespace
+
+struct Stream::Impl {
+  Context::Impl& m;
+  VkCommandBuffer cmd = VK_NULL_HANDLE;
+  VkFence fence = VK_NULL_HANDLE;
+  VkQueryPool queries = VK_NULL_HANDLE;
+  std::uint32_t queries_used = 0;
+  bool pass_open = false;
+  bool warned_queries = false;
+  std::vector<OpenPass> passes;
+  std::vector<PassTime> last_times;
+  std::vector<Access> pending;  // accesses since the last barrier
+  VkPipeline bound_pipeline = VK_NULL_HANDLE;
+  std::vector<VkDescriptorPool> pools;  // fallback path only
+  std::uint32_t sets_in_current_pool = kSetsPerPool;
+  std::vector<std::unique_ptr<RawBuffer>> scratch;
+  std::uint32_t dispatches = 0;
+
+  explicit Impl(Context::Impl& impl) : m(impl) {}
+
+  void begin_recording() {
+    VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    NF_VK_CHECK(vkBeginCommandBuffer(cmd, &begin));
+    if (queries) vkCmdResetQueryPool(cmd, queries, 0, kMaxTimestamps);
+    queries_used = 0;
+    passes.clear();
+    pending.clear();
+    bound_pipeline = VK_NULL_HANDLE;
+    dispatches = 0;
+  }
+
+  void full_barrier() {
+    VkMemoryBarrier b{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    b.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+    b.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_READ_BIT |
+                      VK_ACCESS_TRANSFER_WRITE_BIT;
+    const VkPipelineStageFlags stages = VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT;
+    vkCmdPipelineBarrier(cmd, stages, stages, 0, 1, &b, 0, nullptr, 0, nullptr);
+    pending.clear();
+  }
+
+  // Inserts a barrier when any new access conflicts (RAW, WAR, WAW) with one since the last barrier.
+  void track(const std::vector<Access>& accesses) {
+    bool conflict = false;
+    for (const Access& a : accesses)
+      for (const Access& p : pending)
+        if (a.buffer == p.buffer && a.begin < p.end && p.begin < a.end && (a.write || p.write)) conflict = true;
+    if (conflict) full_barrier();
+    pending.insert(pending.end(), accesses.begin(), accesses.end());
+  }
+
+  VkDescriptorSet allocate_set() {
+    if (sets_in_current_pool == kSetsPerPool) {
+      VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kSetsPerPool * m.binding_slots};
+      VkDescriptorPoolCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+      info.maxSets = kSetsPerPool;
+      info.poolSizeCount = 1;
+      info.pPoolSizes = &size;
+      VkDescriptorPool pool;
+      NF_VK_CHECK(vkCreateDescriptorPool(m.device, &info, nullptr, &pool));
+      pools.push_back(pool);
+      sets_in_current_pool = 0;
+    }
+    VkDescriptorSetAllocateInfo alloc{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+    alloc.descriptorPool = pools.back();
+    alloc.descriptorSetCount = 1;
+    alloc.pSetLayouts = &m.set_layout;
+    VkDescriptorSet set;
+    NF_VK_CHECK(vkAllocateDescriptorSets(m.device, &alloc, &set));
+    ++sets_in_current_pool;
+    return set;
+  }
+};
+
+Stream::Stream(Context& context) : context_(&context), impl_(std::make_unique<Impl>(context.impl())) {
+  Impl& s = *impl_;
+  Context::Impl& m = s.m;
+  VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+  alloc.commandPool = m.command_pool;
+  alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  alloc.commandBufferCount = 1;
+  NF_VK_CHECK(vkAllocateCommandBuffers(m.device, &alloc, &s.cmd));
+  VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+  NF_VK_CHECK(vkCreateFence(m.device, &fence_info, nullptr, &s.fence));
+  if (m.info.features.timestamps) {
+    VkQueryPoolCreateInfo q{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+    q.queryType = VK_QUERY_TYPE_TIMESTAMP;
+    q.queryCount = kMaxTimestamps;
+    NF_VK_CHECK(vkCreateQueryPool(m.device, &q, nullptr, &s.queries));
+  }
+  s.begin_recording();
+}
+
+Stream::~Stream() {
+  Impl& s = *impl_;
+  Context::Impl& m = s.m;
+  vkEndCommandBuffer(s.cmd);
+  for (auto pool : s.pools) vkDestroyDescriptorPool(m.device, pool, nullptr);
+  if (s.queries) vkDestroyQueryPool(m.device, s.queries, nullptr);
+  vkDestroyFence(m.device, s.fence, nullptr);
+  vkFreeCommandBuffers(m.device, m.command_pool, 1, &s.cmd);
+  for (auto& b : s.scratch) m.release_scratch(std::move(b));
+}
+
+void Stream::record_dispatch(const Kernel& kernel, const BufferRange* bindings, std::size_t count, const void* push,
+                             std::size_t push_size, Elements elements, bool explicit_groups) {
+  Impl& s = *impl_;
+  Context::Impl& m = s.m;
+  const KernelLayout& layout = kernel.layout();
+  const DeviceLimits& lim = m.info.limits;
+  if (count != layout.bindings.size())
+    throw InternalError("kernel '" + kernel.name() + "' declares " + std::to_string(layout.bindings.size()) +
+                        " buffer bindings but the dispatch passes " + std::to_string(count));
+  if (push_size != layout.push_constant_size)
+    throw InternalError("kernel '" + kernel.name() + "' declares " + std::to_string(layout.push_constant_size) +
+                        " bytes of push constants but the dispatch passes " + std::to_string(push_size) +
+                        " (the C++ struct and the GLSL block differ)");
+
+  // Group counts.
+  std::array<std::uint64_t, 3> groups{};
+  if (explicit_groups) {
+    groups = {elements.x, elements.y, elements.z};
+  } else {
+    const auto& local = kernel.local_size();
+    groups = {(elements.x + local[0] - 1) / local[0], (elements.y + local[1] - 1) / local[1],
+              (elements.z + local[2] - 1) / local[2]};
+    if (groups[0] > lim.max_workgroup_count[0]) {
+      if (groups[1] != 1)
+        throw InternalError("kernel '" + kernel.name() + "': too many groups along x to fold into y");
+      groups[1] = (groups[0] + lim.max_workgroup_count[0] - 1) / lim.max_workgroup_count[0];
+      groups[0] = (groups[0] + groups[1] - 1) / groups[1];
+    }
+  }
+  if (groups[0] == 0 || groups[1] == 0 || groups[2] == 0) return;  // nothing to do
+  for (int axis = 0; axis < 3; ++axis)
+    if (groups[axis] > lim.max_workgroup_count[axis])
+      throw DeviceError("kernel '" + kernel.name() + "': " + std::to_string(groups[axis]) + " workgroups on axis " +
+                        std::to_string(axis) + " exceed the device limit " +
+                        std::to_string(lim.max_workgroup_count[axis]));
+
+  // Descriptors, with range checks, and the accesses they imply.
+  std::vector<VkDescriptorBufferInfo> infos(count);
+  std::vector<Access> accesses;
+  for (std::size_t b = 0; b < count; ++b) {
+    const BufferRange& r = bindings[b];
+    if (r.size == 0) {  // an unused optional binding: the kernel never touches it
+      infos[b] = {m.dummy->handles().buffer, 0, VK_WHOLE_SIZE};
+      continue;
+    }
+    if (!r.buffer) throw InternalError("kernel '" + kernel.name() + "': binding " + std::to_string(b) + " is null");
+    if (r.size > lim.max_storage_buffer_range)
+      throw DeviceError("kernel '" + kernel.name() + "': binding " + std::to_string(b) + " ('" + r.buffer->name() +
+                        "') spans " + std::to_string(r.size) + " bytes, more than the device's maxStorageBufferRange " +
+                        std::to_string(lim.max_storage_buffer_range) + "; process it in chunks");
+    if (r.offset % lim.min_storage_buffer_offset_alignment)
+      throw InternalError("kernel '" + kernel.name() + "': binding " + std::to_string(b) + " offset " +
+                          std::to_string(r.offset) + " is not a multiple of minStorageBufferOffsetAlignment " +
+                          std::to_string(lim.min_storage_buffer_offset_alignment));
+    infos[b] = {r.buffer->handles().buffer, r.offset, r.size};
+    const BindingInfo& access = layout.bindings[b];
+    if (access.read || access.write)
+      accesses.push_back({r.buffer->handles().buffer, r.offset, r.offset + r.size, access.write});
+  }
+  s.track(accesses);
+
+  if (s.bound_pipeline != kernel.handles().pipeline) {
+    vkCmdBindPipeline(s.cmd, VK_PIPELINE_BIND_POINT_COMPUTE, kernel.handles().pipeline);
+    s.bound_pipeline = kernel.handles().pipeline;
+  }
+  std::vector<VkWriteDescriptorSet> writes(count, VkWriteDescriptorSet{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET});
+  for (std::size_t b = 0; b < count; ++b) {
+    writes[b].dstBinding = std::uint32_t(b);
+    writes[b].descriptorCount = 1;
+    writes[b].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    writes[b].pBufferInfo = &infos[b];
+  }
+  if (count > 0) {
+    if (m.tuning.use_push_descriptors) {
+      m.push_descriptor(s.cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m.pipeline_layout, 0, std::uint32_t(count), writes.data());
+    } else {
+      const VkDescriptorSet set = s.allocate_set();
+      for (auto& w : writes) w.dstSet = set;
+      vkUpdateDescriptorSets(m.device, std::uint32_t(count), writes.data(), 0, nullptr);
+      vkCmdBindDescriptorSets(s.cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m.pipeline_layout, 0, 1, &set, 0, nullptr);
+    }
+  }
+  if (push_size) vkCmdPushConstants(s.cmd, m.pipeline_layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, std::uint32_t(push_size), push);
+  vkCmdDispatch(s.cmd, std::uint32_t(groups[0]), std::uint32_t(groups[1]), std::uint32_t(groups[2]));
+  ++s.dispatches;
+}
+
+void Stream::copy(BufferRange source, BufferRange destination) {
+  Impl& s = *impl_;
+  if (source.size != destination.size)
+    throw InternalError("copy from '" + source.buffer->name() + "' to '" + destination.buffer->name() +
+                        "': sizes differ (" + std::to_string(source.size) + " vs " + std::to_string(destination.size) + ")");
+  if (source.size == 0) return;
+  s.track({{source.buffer->handles().buffer, source.offset, source.offset + source.size, false},
+           {destination.buffer->handles().buffer, destination.offset, destination.offset + destination.size, true}});
+  VkBufferCopy region{source.offset, destination.offset, source.size};
+  vkCmdCopyBuffer(s.cmd, source.buffer->handles().buffer, destination.buffer->handles().buffer, 1, &region);
+}
+
+void Stream::fill(BufferRange range, std::uint32_t value) {
+  Impl& s = *impl_;
+  if (range.size == 0) return;
+  if (range.offset % 4 || range.size % 4)
+    throw InternalError("fill of '" + range.buffer->name() + "': offset and size must be multiples of 4 bytes");
+  s.track({{range.buffer->handles().buffer, range.offset, range.offset + range.size, true}});
+  vkCmdFillBuffer(s.cmd, range.buffer->handles().buffer, range.offset, range.size, value);
+}
+
+void Stream::barrier() { impl_->full_barrier(); }
+
+BufferRange Stream::scratch(std::uint64_t bytes, const char*) {
+  Impl& s = *impl_;
+  auto buffer = s.m.acquire_scratch(bytes);
+  const BufferRange r{buffer.get(), 0, bytes};
+  s.scratch.push_back(std::move(buffer));
+  return r;
+}
+
+void Stream::begin_pass(const std::string& name) {
+  Impl& s = *impl_;
+  if (s.pass_open) throw InternalError("pass '" + name + "' begun inside pass '" + s.passes.back().name + "'");
+  s.pass_open = true;
+  if (!s.queries || s.queries_used + 2 > kMaxTimestamps) {
+    if (s.queries && !s.warned_queries) {
+      log::warn("more than ", kMaxTimestamps / 2, " timed passes in one submit; later passes are not timed");
+      s.warned_queries = true;
+    }
+    s.passes.push_back({name, ~0u});
+    return;
+  }
+  vkCmdWriteTimestamp(s.cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, s.queries, s.queries_used);
+  s.passes.push_back({name, s.queries_used++});
+}
+
+void Stream::end_pass() {
+  Impl& s = *impl_;
+  if (!s.pass_open) throw InternalError("end_pass without begin_pass");
+  s.pass_open = false;
+  OpenPass& p = s.passes.back();
+  if (p.begin_query == ~0u) return;
+  vkCmdWriteTimestamp(s.cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, s.queries, s.queries_used);
+  p.end_query = s.queries_used++;
+}
+
+void Stream::submit_and_wait() {
+  Impl& s = *impl_;
+  Context::Impl& m = s.m;
+  if (s.pass_open) throw InternalError("submit inside the open pass '" + s.passes.back().name + "'");
+  // Make device writes visible to the host before it reads mapped memory.
+  VkMemoryBarrier to_host{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+  to_host.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+  to_host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+  vkCmdPipelineBarrier(s.cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                       VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &to_host, 0, nullptr, 0, nullptr);
+  NF_VK_CHECK(vkEndCommandBuffer(s.cmd));
+  VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+  submit.commandBufferCount = 1;
+  submit.pCommandBuffers = &s.cmd;
+  {
+    std::lock_guard lock(m.queue_mutex);
+    NF_VK_CHECK(vkQueueSubmit(m.queue, 1, &submit, s.fence));
+  }
+  const VkResult waited = vkWaitForFences(m.device, 1, &s.fence, VK_TRUE, kWaitTimeoutNs);
+  if (waited == VK_TIMEOUT) throw DeviceError("GPU work did not finish within 600 s (hung kernel or lost device)");
+  NF_VK_CHECK(waited);
+
+  s.last_times.clear();
+  if (s.queries_used > 0) {
+    std::vector<std::uint64_t> ticks(s.queries_used);
+    NF_VK_CHECK(vkGetQueryPoolResults(m.device, s.queries, 0, s.queries_used, ticks.size() * 8, ticks.data(), 8,
+                                      VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
+    std::lock_guard lock(m.pass_mutex);
+    for (const OpenPass& p : s.passes) {
+      if (p.begin_query == ~0u || p.end_query == ~0u) continue;
+      const double ms = double(ticks[p.end_query] - ticks[p.begin_query]) * m.info.limits.timestamp_period_ns * 1e-6;
+      s.last_times.push_back({p.name, ms});
+      PassTotal& t = m.pass_totals[p.name];
+      t.milliseconds += ms;
+      t.count += 1;
+    }
+  }
+
+  NF_VK_CHECK(vkResetFences(m.device, 1, &s.fence));
+  NF_VK_CHECK(vkResetCommandBuffer(s.cmd, 0));
+  for (auto pool : s.pools) NF_VK_CHECK(vkResetDescriptorPool(m.device, pool, 0));
+  if (!s.pools.empty()) {
+    for (std::size_t i = 1; i < s.pools.size(); ++i) vkDestroyDescriptorPool(m.device, s.pools[i], nullptr);
+    s.pools.resize(1);
+    s.sets_in_current_pool = 0;
+  }
+  for (auto& b : s.scratch) m.release_scratch(std::move(b));
+  s.scratch.clear();
+  s.begin_recording();
+}
+
+std::uint32_t Stream::pending_dispatches() const { return impl_->dispatches; }
+const std::vector<PassTime>& Stream::last_pass_times() const { return impl_->last_times; }
+
+}  // namespace nf::gpu
