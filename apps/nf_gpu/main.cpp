@@ -1,6 +1,138 @@
+// nf_gpu: the command line. Parsing and printing only; the work lives in engine/.
+#include <CLI/CLI.hpp>
+
+#include <fstream>
 #include <iostream>
+
+#include "engine/bench/suites.hpp"
+#include "engine/core/error.hpp"
+#include "engine/core/json.hpp"
+#include "engine/core/log.hpp"
 #include "engine/gpu/context.hpp"
-int main() {
-  nf::gpu::Context ctx;
-  std::cout << nf::gpu::to_json(ctx.info()).dump(2) << "\n";
+#include "engine/gradcheck/catalog.hpp"
+
+namespace {
+
+using nf::json;
+
+void print_profile(const nf::gpu::Context& context) {
+  const auto totals = context.pass_totals();
+  if (totals.empty()) return;
+  std::cerr << "GPU time per pass:\n";
+  for (const auto& [name, t] : totals)
+    std::fprintf(stderr, "  %-32s %10.3f ms  (%llu runs, %.3f ms each)\n", name.c_str(), t.milliseconds,
+                 (unsigned long long)t.count, t.count ? t.milliseconds / double(t.count) : 0.0);
+}
+
+int run_info(bool as_json) {
+  const auto devices = nf::gpu::Context::enumerate_devices();
+  nf::gpu::Context context;
+  if (as_json) {
+    json out{{"chosen", nf::gpu::to_json(context.info())}, {"devices", json::array()}};
+    for (const auto& d : devices) out["devices"].push_back({{"index", d.index}, {"name", d.name}, {"type", d.type}});
+    std::cout << out.dump(2) << "\n";
+    return 0;
+  }
+  const auto& i = context.info();
+  const auto& l = i.limits;
+  const auto& f = i.features;
+  std::cout << "device: " << i.name << " (" << i.type << ", " << i.driver << ", " << i.driver_info << ", Vulkan "
+            << i.api_version << ")\n";
+  std::cout << "memory: " << i.device_memory_bytes / (1024 * 1024) << " MiB device-local\n";
+  std::cout << "limits: storage buffer range " << l.max_storage_buffer_range / (1024 * 1024) << " MiB, allocation "
+            << l.max_allocation_size / (1024 * 1024) << " MiB, push constants " << l.max_push_constants_size
+            << " B, shared memory " << l.max_compute_shared_memory / 1024 << " KiB, subgroup " << l.subgroup_size
+            << ", workgroup <= " << l.max_workgroup_invocations << " invocations\n";
+  std::cout << "features: float atomic add " << (f.float32_atomic_add_buffer ? "yes" : "no") << ", fp16 "
+            << (f.float16 ? "yes" : "no") << ", int64 " << (f.int64 ? "yes" : "no") << ", timestamps "
+            << (f.timestamps ? "yes" : "no") << ", push descriptors " << (f.push_descriptors ? "yes" : "no")
+            << ", subgroup ops";
+  for (const auto& op : f.subgroup_operations) std::cout << " " << op;
+  std::cout << "\n";
+  for (const auto& q : i.quirks) std::cout << "quirk: " << q << "\n";
+  std::cout << "all devices (NF_DEVICE=<index|name> picks one):\n";
+  for (const auto& d : devices)
+    std::cout << "  " << d.index << ": " << d.name << " (" << d.type << ")" << (d.name == i.name ? "  <- chosen" : "")
+              << "\n";
+  return 0;
+}
+
+int run_gradcheck(const std::string& only, bool as_json) {
+  nf::gpu::Context context;
+  std::vector<nf::gradcheck::Row> rows;
+  bool found = false;
+  for (const auto& kernel : nf::gradcheck::all_kernels()) {
+    if (!only.empty() && kernel->name() != only) continue;
+    found = true;
+    const auto r = nf::gradcheck::run_checks(context, *kernel);
+    rows.insert(rows.end(), r.begin(), r.end());
+  }
+  if (!found) {
+    std::string names;
+    for (const auto& kernel : nf::gradcheck::all_kernels()) names += " " + kernel->name();
+    throw nf::UsageError("no differentiable kernel named '" + only + "'; kernels:" + names);
+  }
+  if (as_json)
+    std::cout << nf::gradcheck::to_json(rows).dump(2) << "\n";
+  else
+    nf::gradcheck::print_table(std::cout, rows);
+  const bool ok = nf::gradcheck::all_passed(rows);
+  std::cerr << (ok ? "gradcheck: all checks passed\n" : "gradcheck: FAILED\n");
+  return ok ? 0 : int(nf::ExitCode::DeviceOrInternal);
+}
+
+int run_bench(const nf::bench::Options& options, const std::string& json_path, bool profile) {
+  nf::gpu::Context context;
+  const json records = nf::bench::run_suite(context, options);
+  std::cout << records.dump(2) << "\n";
+  if (!json_path.empty()) nf::bench::write_records(json_path, records);
+  if (profile) print_profile(context);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"nf_gpu: furless body mesh and strand-based fur from multi-view photos, on Vulkan compute"};
+  app.require_subcommand(1);
+  app.fallthrough();  // global flags such as --profile may follow the subcommand
+  bool profile = false;
+  app.add_flag("--profile", profile, "print GPU time per pass at exit");
+
+  bool info_json = false;
+  auto* info = app.add_subcommand("info", "Vulkan devices, the chosen one, its limits and features");
+  info->add_flag("--json", info_json, "machine-readable output");
+
+  std::string kernel_name;
+  bool gradcheck_json = false;
+  auto* gradcheck = app.add_subcommand("gradcheck", "check every differentiable kernel against references and finite differences");
+  gradcheck->add_option("--kernel", kernel_name, "only this kernel (e.g. splat/segment_gaussian)");
+  gradcheck->add_flag("--json", gradcheck_json, "machine-readable output");
+
+  nf::bench::Options bench_options;
+  std::string bench_json;
+  auto* bench = app.add_subcommand("bench", "measure speed (with error) and write JSON records");
+  bench->add_option("--suite", bench_options.suite, "suite to run")->check(CLI::IsMember(nf::bench::suite_names()));
+  bench->add_option("--json", bench_json, "also write the records to this file");
+  bench->add_flag("--quick", bench_options.quick, "smaller sizes and fewer repeats (smoke run)");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? 0 : int(nf::ExitCode::Usage);
+  }
+
+  try {
+    if (*info) return run_info(info_json);
+    if (*gradcheck) return run_gradcheck(kernel_name, gradcheck_json);
+    if (*bench) return run_bench(bench_options, bench_json, profile);
+  } catch (const nf::Error& e) {
+    std::cerr << "nf_gpu: error: " << e.what() << "\n";
+    return int(e.code());
+  } catch (const std::exception& e) {
+    std::cerr << "nf_gpu: internal error: " << e.what() << "\n";
+    return int(nf::ExitCode::DeviceOrInternal);
+  }
+  return 0;
 }

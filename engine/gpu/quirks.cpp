@@ -12,15 +12,16 @@ struct Quirk {
 };
 
 // CPU implementations share one heap between host and "device": mapping device memory avoids a
-// staging copy, and invocations are cheap next to dispatches, so each does more work.
+// staging copy. Workgroup barriers are costly there (each switches between the invocations'
+// coroutines), so every invocation does more work: 32 items measured 1.5x faster sorts than 8.
 void cpu_device(DeviceTuning& t) {
   t.mapped_device_buffers = true;
-  t.items_per_thread = 8;
+  t.items_per_thread = 32;
 }
 
 const Quirk kQuirks[] = {
-    {VK_DRIVER_ID_MESA_LLVMPIPE, "lavapipe: CPU device, mapped buffers, 8 items per invocation", cpu_device},
-    {VK_DRIVER_ID_GOOGLE_SWIFTSHADER, "SwiftShader: CPU device, mapped buffers, 8 items per invocation", cpu_device},
+    {VK_DRIVER_ID_MESA_LLVMPIPE, "lavapipe: CPU device, mapped buffers, 32 items per invocation", cpu_device},
+    {VK_DRIVER_ID_GOOGLE_SWIFTSHADER, "SwiftShader: CPU device, mapped buffers, 32 items per invocation", cpu_device},
 };
 
 }  // namespace

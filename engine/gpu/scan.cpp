@@ -20,8 +20,12 @@ struct ScanKernels {
 };
 
 ScanKernels kernels(Context& context, bool flags) {
-  const std::uint32_t wg = primitive_workgroup(context, 256);
   const std::uint32_t items = context.tuning().items_per_thread;
+  // scan_blocks keeps WG*ITEMS words in shared memory plus a uvec4 per invocation.
+  std::uint32_t wg = primitive_workgroup(context, 256);
+  while (wg > context.info().limits.subgroup_size &&
+         std::uint64_t(wg) * items * 4 + std::uint64_t(wg) * 16 + 64 > context.info().limits.max_compute_shared_memory)
+    wg /= 2;
   const std::vector<SpecConstant> spec{{0, wg}, {1, items}};
   const std::string v = flags ? ":flags" : ":add";
   return {context.kernel("gpu/scan_block_sums" + v, spec), context.kernel("gpu/scan_blocks" + v, spec),

@@ -1,0 +1,18 @@
+#include "engine/bench/suites.hpp"
+
+#include "engine/bench/core_suite.hpp"
+#include "engine/core/atomic_file.hpp"
+#include "engine/core/error.hpp"
+
+namespace nf::bench {
+
+std::vector<std::string> suite_names() { return {"core"}; }
+
+json run_suite(gpu::Context& context, const Options& options) {
+  if (options.suite == "core") return run_core_suite(context, options);
+  throw UsageError("unknown bench suite '" + options.suite + "'");
+}
+
+void write_records(const std::string& path, const json& records) { write_file_atomic(path, records.dump(2) + "\n"); }
+
+}  // namespace nf::bench

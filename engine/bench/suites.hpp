@@ -1,0 +1,27 @@
+#pragma once
+// `nf_gpu bench`: speed measured next to error, one JSON record per measurement.
+// Record schema (shared by every suite): suite, case, device, driver, params {...}, repeats,
+// seconds {median, min, max} (wall, host-observed), gpu_ms (median per-pass GPU time when the
+// device has timestamps), peak_device_bytes, metrics {...} (throughputs, ratios, errors).
+#include <string>
+#include <vector>
+
+#include "engine/core/json.hpp"
+
+namespace nf::gpu {
+class Context;
+}
+
+namespace nf::bench {
+
+struct Options {
+  std::string suite = "core";
+  bool quick = false;  // smaller sizes and fewer repeats: a smoke run
+};
+
+std::vector<std::string> suite_names();
+json run_suite(gpu::Context& context, const Options& options);
+// Writes the records as a JSON array, atomically.
+void write_records(const std::string& path, const json& records);
+
+}  // namespace nf::bench
