@@ -1,0 +1,95 @@
+// The nf_gpu command line as a user runs it: outputs, JSON records and exit codes.
+#include <doctest/doctest.h>
+
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <string>
+
+#include "engine/core/json.hpp"
+
+namespace {
+
+struct Result {
+  int code;
+  std::string output;  // stdout and stderr together
+};
+
+Result run(const std::string& args) {
+  const std::string command = std::string(NF_GPU_BINARY) + " " + args + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  REQUIRE(pipe != nullptr);
+  Result r{0, {}};
+  char buffer[4096];
+  while (std::size_t n = std::fread(buffer, 1, sizeof buffer, pipe)) r.output.append(buffer, n);
+  const int status = pclose(pipe);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+}  // namespace
+
+TEST_CASE("nf_gpu info names the device, as text and as JSON") {
+  const Result text = run("info");
+  CHECK(text.code == 0);
+  CHECK(text.output.find("device: ") != std::string::npos);
+  CHECK(text.output.find("<- chosen") != std::string::npos);
+  const Result j = run("info --json");
+  REQUIRE(j.code == 0);
+  const nf::json info = nf::json::parse(j.output);
+  CHECK(!info["chosen"]["name"].get<std::string>().empty());
+  CHECK(info["chosen"]["limits"]["max_storage_buffer_range"].get<std::uint64_t>() > 0);
+  CHECK(info["devices"].size() >= 1);
+}
+
+TEST_CASE("nf_gpu gradcheck prints one passing row per kernel, case, check and array") {
+  const Result r = run("gradcheck --kernel splat/segment_gaussian");
+  CHECK(r.code == 0);
+  CHECK(r.output.find("max rel") != std::string::npos);
+  CHECK(r.output.find("zero_length") != std::string::npos);
+  CHECK(r.output.find("FAIL") == std::string::npos);
+  CHECK(r.output.find("all checks passed") != std::string::npos);
+  CHECK(r.output.find("validation") == std::string::npos);  // ctest runs nf_gpu with NF_VALIDATION=1
+  const Result bad = run("gradcheck --kernel no/such_kernel");
+  CHECK(bad.code == 2);
+  CHECK(bad.output.find("splat/segment_gaussian") != std::string::npos);  // lists what exists
+}
+
+TEST_CASE("nf_gpu bench --suite core writes the roofline records") {
+  const auto path = std::filesystem::temp_directory_path() / "nf_test_bench_core.json";
+  std::filesystem::remove(path);
+  const Result r = run("bench --suite core --quick --json " + path.string());
+  REQUIRE(r.code == 0);
+  CHECK(r.output.find("validation") == std::string::npos);
+  std::ifstream in(path);
+  const nf::json records = nf::json::parse(in);
+  REQUIRE(records.is_array());
+  std::set<std::string> cases;
+  for (const auto& rec : records) {
+    for (const char* key : {"suite", "case", "device", "params", "repeats", "seconds", "metrics", "peak_device_bytes"})
+      CHECK(rec.contains(key));
+    CHECK(rec["seconds"]["median"].get<double>() > 0);
+    cases.insert(rec["case"].get<std::string>());
+  }
+  for (const char* c : {"copy_transfer", "copy_shader", "fma_f32", "dispatch_latency", "submit_latency",
+                        "radix_sort_kv32", "std_sort_kv32", "exclusive_scan_u32", "reduce_sum_u32"})
+    CHECK(cases.count(c) == 1);
+  for (const auto& rec : records) {
+    if (rec["case"] == "radix_sort_kv32") {
+      CHECK(rec["metrics"]["mismatches_vs_std_stable_sort"].get<std::uint64_t>() == 0);
+      CHECK(rec["metrics"]["speedup_vs_std_sort"].get<double>() > 0);
+    }
+    if (rec["case"] == "fma_f32") CHECK(rec["metrics"]["GFLOPs_wall"].get<double>() > 0);
+  }
+  std::filesystem::remove(path);
+}
+
+TEST_CASE("usage errors exit with 2") {
+  CHECK(run("").code == 2);
+  CHECK(run("no-such-command").code == 2);
+  CHECK(run("bench --suite no-such-suite").code == 2);
+  CHECK(run("--help").code == 0);
+}

@@ -1,0 +1,186 @@
+// The Vulkan runtime: device choice, buffers and transfers, reflected kernels and the asserting
+// dispatch, automatic barriers, timestamps, errors. ctest also runs this suite with the fallback
+// paths forced (NF_NO_PUSH_DESCRIPTORS=1, NF_FORCE_STAGING=1) so CI exercises them on lavapipe.
+#include <doctest/doctest.h>
+
+#include <cstdlib>
+#include <numeric>
+
+#include "engine/core/error.hpp"
+#include "engine/gpu/chunking.hpp"
+#include "engine/gpu/kernel.hpp"
+#include "engine/gpu/shader_registry.hpp"
+#include "engine/gpu/stream.hpp"
+#include "tests/support/gpu_test.hpp"
+
+using namespace nf;
+using namespace nf::gpu;
+
+namespace {
+struct CopyPush {
+  std::uint32_t n;
+};
+struct WrongPush {
+  std::uint32_t n, extra;
+};
+}  // namespace
+
+TEST_CASE("the context describes its device and honours the forced fallbacks") {
+  auto& ctx = test::context();
+  const DeviceInfo& i = ctx.info();
+  CHECK(!i.name.empty());
+  CHECK(i.limits.max_storage_buffer_range > 0);
+  CHECK(i.limits.max_push_constants_size >= 128);
+  CHECK(i.limits.subgroup_size >= 1);
+  CHECK(to_json(i)["limits"]["max_storage_buffer_range"] == i.limits.max_storage_buffer_range);
+  if (const char* v = std::getenv("NF_NO_PUSH_DESCRIPTORS"); v && *v == '1') CHECK_FALSE(ctx.tuning().use_push_descriptors);
+  if (const char* v = std::getenv("NF_FORCE_STAGING"); v && *v == '1') CHECK_FALSE(ctx.tuning().mapped_device_buffers);
+  CHECK(ctx.validation_enabled() == (std::getenv("NF_VALIDATION") != nullptr));
+}
+
+TEST_CASE("NF_DEVICE selects by index and by name, and names the devices when nothing matches") {
+  const auto devices = Context::enumerate_devices();
+  REQUIRE(!devices.empty());
+  ContextOptions by_index;
+  by_index.device = std::to_string(devices.back().index);
+  CHECK(Context(by_index).info().name == devices.back().name);
+  ContextOptions by_name;
+  by_name.device = devices.front().name.substr(0, 4);
+  CHECK_NOTHROW(Context{by_name});
+  ContextOptions none;
+  none.device = "no-such-gpu-xyz";
+  CHECK_THROWS_WITH_AS(Context{none}, doctest::Contains(devices.front().name.c_str()), UsageError);
+}
+
+TEST_CASE("buffers round-trip data, sub-ranges and fills, including empty buffers") {
+  auto& ctx = test::context();
+  const auto data = test::random_u32(10007, 1);
+  Buffer<std::uint32_t> b(ctx, std::span<const std::uint32_t>(data), "round trip");
+  CHECK(b.download() == data);
+  CHECK(b.download(100, 5) == std::vector<std::uint32_t>(data.begin() + 100, data.begin() + 105));
+  const std::vector<std::uint32_t> patch = {1, 2, 3};
+  b.upload(patch, 10);
+  CHECK(b.download(10, 3) == patch);
+  b.fill_u32(7);
+  CHECK(b.download() == std::vector<std::uint32_t>(10007, 7));
+  Buffer<float> empty(ctx, 0, "empty");
+  CHECK(empty.download().empty());
+  CHECK_THROWS_AS(b.upload(patch, 10006), InternalError);
+  CHECK_THROWS_AS(b.range(10000, 8), InternalError);
+  CHECK(ctx.allocated_bytes() > 0);
+  CHECK(ctx.peak_allocated_bytes() >= ctx.allocated_bytes());
+}
+
+TEST_CASE("an allocation larger than the device allows is refused with a clear error") {
+  auto& ctx = test::context();
+  const std::uint64_t too_big = ctx.info().limits.max_allocation_size + 16;
+  CHECK_THROWS_WITH_AS(RawBuffer(ctx, too_big, "huge"), doctest::Contains("'huge'"), DeviceError);
+}
+
+TEST_CASE("kernels are reflected from their embedded SPIR-V") {
+  auto& ctx = test::context();
+  const Kernel& k = ctx.kernel("bench/core_copy", {{0, 64}});
+  CHECK(k.local_size()[0] == 64);
+  CHECK(k.layout().push_constant_size == sizeof(CopyPush));
+  REQUIRE(k.layout().bindings.size() == 2);
+  CHECK(k.layout().bindings[0].read);
+  CHECK_FALSE(k.layout().bindings[0].write);  // readonly
+  CHECK_FALSE(k.layout().bindings[1].read);   // writeonly
+  CHECK(k.layout().bindings[1].write);
+  CHECK(&ctx.kernel("bench/core_copy", {{0, 64}}) == &k);  // cached
+  CHECK(&ctx.kernel("bench/core_copy", {{0, 128}}) != &k);
+  const auto names = shader_names();
+  CHECK(std::find(names.begin(), names.end(), "gpu/reduce:sum_f32") != names.end());
+  CHECK_THROWS_WITH_AS(ctx.kernel("gpu/no_such_kernel"), doctest::Contains("gpu/reduce"), InternalError);
+  CHECK_THROWS_WITH_AS(ctx.kernel("bench/core_copy", {{5, 1}}), doctest::Contains("specialisation constant 5"),
+                       InternalError);
+  CHECK_THROWS_AS(ctx.kernel("bench/core_copy", {{0, 100000}}), DeviceError);
+  const std::uint32_t words[] = {0x12345678u, 0, 0, 0, 0};
+  CHECK_THROWS_WITH_AS(reflect_spirv(words, "garbage"), doctest::Contains("garbage"), InternalError);
+}
+
+TEST_CASE("dispatch asserts binding count, push-constant size and binding ranges") {
+  auto& ctx = test::context();
+  const Kernel& k = ctx.kernel("bench/core_copy", {{0, 64}});
+  Buffer<float> a(ctx, 64, "a"), b(ctx, 64, "b");
+  Stream s(ctx);
+  CHECK_THROWS_WITH_AS(s.dispatch(k, {a}, CopyPush{16}, Elements(16)), doctest::Contains("declares 2 buffer bindings"),
+                       InternalError);
+  CHECK_THROWS_WITH_AS(s.dispatch(k, {a, b}, WrongPush{16, 0}, Elements(16)),
+                       doctest::Contains("declares 4 bytes of push constants"), InternalError);
+  const std::uint64_t range = ctx.info().limits.max_storage_buffer_range;
+  if (range + 64 <= ctx.info().limits.max_allocation_size) {
+    RawBuffer big(ctx, range + 64, "bigger than a binding");
+    CHECK_THROWS_WITH_AS(s.dispatch(k, {big.whole(), b}, CopyPush{16}, Elements(16)),
+                         doctest::Contains("maxStorageBufferRange"), DeviceError);
+  }
+  s.submit_and_wait();
+}
+
+TEST_CASE("chains of dependent dispatches get their barriers; independent ones run without") {
+  auto& ctx = test::context();
+  const Kernel& copy = ctx.kernel("bench/core_copy", {{0, 64}});
+  const std::uint32_t n = 4096;  // vec4s
+  std::vector<float> src(n * 4);
+  std::iota(src.begin(), src.end(), 0.f);
+  Buffer<float> a(ctx, std::span<const float>(src), "a"), b(ctx, n * 4, "b"), c(ctx, n * 4, "c");
+  Stream s(ctx);
+  for (int round = 0; round < 20; ++round) {  // a -> b -> c -> a ... read-after-write each time
+    s.dispatch(copy, {a, b}, CopyPush{n}, Elements(n));
+    s.dispatch(copy, {b, c}, CopyPush{n}, Elements(n));
+    s.fill(a.whole(), 0);  // write-after-read on a
+    s.dispatch(copy, {c, a}, CopyPush{n}, Elements(n));
+  }
+  CHECK(s.pending_dispatches() == 60);
+  s.submit_and_wait();
+  CHECK(a.download() == src);
+  CHECK(s.pending_dispatches() == 0);
+}
+
+TEST_CASE("more groups than one dimension allows fold into y and every element is covered") {
+  auto& ctx = test::context();
+  const Kernel& copy = ctx.kernel("bench/core_copy", {{0, 1}});  // one invocation per group
+  const std::uint32_t n = ctx.info().limits.max_workgroup_count[0] + 1000;
+  std::vector<float> src(std::size_t(n) * 4);
+  for (std::size_t i = 0; i < src.size(); ++i) src[i] = float(i % 1000);
+  Buffer<float> a(ctx, std::span<const float>(src), "a"), b(ctx, src.size(), "b");
+  Stream s(ctx);
+  s.dispatch(copy, {a, b}, CopyPush{n}, Elements(n));
+  s.submit_and_wait();
+  CHECK(b.download() == src);
+}
+
+TEST_CASE("passes are timed on devices with timestamps and misuse of passes is reported") {
+  auto& ctx = test::context();
+  const Kernel& copy = ctx.kernel("bench/core_copy", {{0, 64}});
+  Buffer<float> a(ctx, 1 << 16, "a"), b(ctx, 1 << 16, "b");
+  Stream s(ctx);
+  {
+    ScopedPass pass(s, "test/copy");
+    s.dispatch(copy, {a, b}, CopyPush{1 << 14}, Elements(1 << 14));
+  }
+  s.submit_and_wait();
+  if (ctx.info().features.timestamps) {
+    REQUIRE(s.last_pass_times().size() == 1);
+    CHECK(s.last_pass_times()[0].name == "test/copy");
+    CHECK(s.last_pass_times()[0].milliseconds >= 0);
+    CHECK(ctx.pass_totals().count("test/copy") == 1);
+  }
+  CHECK_THROWS_AS(s.end_pass(), InternalError);
+  s.begin_pass("outer");
+  CHECK_THROWS_AS(s.begin_pass("inner"), InternalError);
+  CHECK_THROWS_AS(s.submit_and_wait(), InternalError);
+  s.end_pass();
+  s.submit_and_wait();
+}
+
+TEST_CASE("chunk sizes respect the binding range and the offset alignment") {
+  auto& ctx = test::context();
+  const auto& l = ctx.info().limits;
+  const std::uint64_t per = max_binding_elements(ctx, 4);
+  CHECK(per * 4 <= l.max_storage_buffer_range);
+  CHECK((per * 4) % l.min_storage_buffer_offset_alignment == 0);
+  const std::uint64_t items = items_per_chunk(ctx, {1200, 1188, 2376});  // 100-point strands
+  CHECK(items * 2376 <= l.max_storage_buffer_range);
+  for (std::uint64_t b : {1200u, 1188u, 2376u}) CHECK((items * b) % l.min_storage_buffer_offset_alignment == 0);
+}
