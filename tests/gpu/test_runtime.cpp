@@ -184,3 +184,18 @@ TEST_CASE("chunk sizes respect the binding range and the offset alignment") {
   CHECK(items * 2376 <= l.max_storage_buffer_range);
   for (std::uint64_t b : {1200u, 1188u, 2376u}) CHECK((items * b) % l.min_storage_buffer_offset_alignment == 0);
 }
+
+TEST_CASE("the validation layer is live: a pipeline over the shared-memory limit is reported") {
+  auto& ctx = test::context();
+  if (!ctx.validation_enabled()) return;
+  ctx.take_validation_messages();
+  // 256 invocations x 64 items x 4 bytes of shared tile: far over any device's 32-48 KiB.
+  try {
+    ctx.kernel("gpu/scan_blocks:add", {{0, 256}, {1, 64}});
+  } catch (const Error&) {
+    // a driver may also refuse the pipeline outright; the layer must have spoken either way
+  }
+  const auto messages = ctx.take_validation_messages();
+  REQUIRE(!messages.empty());
+  CHECK(messages.front().find("maxComputeSharedMemorySize") != std::string::npos);
+}
