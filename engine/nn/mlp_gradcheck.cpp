@@ -1,0 +1,124 @@
+#include "engine/nn/mlp_gradcheck.hpp"
+
+#include <random>
+
+#include "engine/gpu/context.hpp"
+#include "engine/nn/mlp.hpp"
+#include "engine/nn/mlp_ref.hpp"
+
+namespace nf::nn {
+namespace {
+
+using gradcheck::Arrays;
+using gradcheck::Case;
+using gradcheck::Params;
+
+MlpConfig config_of(const Params& p) {
+  MlpConfig c;
+  c.input_dim = std::uint32_t(p.at("in"));
+  c.hidden = {std::uint32_t(p.at("hidden0")), std::uint32_t(p.at("hidden1"))};
+  c.output_dim = std::uint32_t(p.at("out"));
+  c.hidden_activation = {Activation(std::uint32_t(p.at("activation"))), float(p.at("beta")), float(p.at("omega"))};
+  c.output_activation = {Activation(std::uint32_t(p.at("output_activation"))), float(p.at("beta")), float(p.at("omega"))};
+  return c;
+}
+
+Case make_case(const std::string& name, Activation act, Activation out_act, std::uint32_t batch, double input_scale,
+               double beta, double omega, unsigned seed) {
+  Params p{{"in", 5}, {"hidden0", 16}, {"hidden1", 7}, {"out", 3}, {"batch", batch},
+           {"activation", double(act)}, {"output_activation", double(out_act)}, {"beta", beta}, {"omega", omega}};
+  const MlpConfig c = config_of(p);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<double> params(c.parameter_count());
+  for (const LayerShape& l : c.layers()) {
+    const double bound = (act == Activation::Sine ? 1.0 / omega : 1.0) * std::sqrt(6.0 / l.in);
+    for (std::uint64_t i = 0; i < std::uint64_t(l.in) * l.out; ++i) params[l.weight_offset + i] = bound * u(rng);
+    for (std::uint32_t o = 0; o < l.out; ++o) params[l.bias_offset + o] = 0.1 * u(rng);
+  }
+  std::vector<double> input(std::size_t(c.input_dim) * batch);
+  for (double& x : input) x = input_scale * u(rng);
+  Case cs;
+  cs.name = name;
+  cs.params = p;
+  cs.inputs = {params, input};
+  cs.step_double = {1e-6, 1e-6 * input_scale};
+  cs.step_float = {1e-3, 1e-3 * input_scale};
+  return cs;
+}
+
+// ReLU has kinks: a float difference step that straddles one sees the mean of both slopes. A step
+// of 1e-4 keeps straddles rare while float rounding stays ~1e-3 of the gradient.
+Case relu_case() {
+  Case c = make_case("relu", Activation::ReLU, Activation::None, 37, 1.0, 100, 30, 1);
+  c.step_float = {1e-4, 1e-4};
+  return c;
+}
+
+class MlpCheck : public gradcheck::WithReference<MlpCheck> {
+ public:
+  std::string name() const override { return "nn/mlp"; }
+  std::vector<std::string> input_names() const override { return {"parameters", "input"}; }
+  std::vector<std::string> output_names() const override { return {"output"}; }
+
+  std::vector<Case> cases() const override {
+    return {
+        relu_case(),
+        make_case("softplus", Activation::Softplus, Activation::None, 70, 1.0, 100, 30, 2),
+        // beta * x far past the linear switch: exp would overflow without the guard.
+        make_case("softplus_big_x", Activation::Softplus, Activation::Softplus, 33, 50.0, 100, 30, 3),
+        make_case("sine_siren", Activation::Sine, Activation::None, 65, 1.0, 100, 30, 4),
+        make_case("none_linear", Activation::None, Activation::Sine, 129, 1.0, 100, 2, 5),
+    };
+  }
+
+  template <class T>
+  Arrays<T> forward(const Params& p, const Arrays<T>& in) const {
+    return {mlp_forward_ref(config_of(p), in[0], in[1], std::uint32_t(p.at("batch"))).y.back()};
+  }
+
+  template <class T>
+  Arrays<T> backward(const Params& p, const Arrays<T>& in, const Arrays<T>& grad_out) const {
+    const MlpConfig c = config_of(p);
+    const std::uint32_t batch = std::uint32_t(p.at("batch"));
+    const auto trace = mlp_forward_ref(c, in[0], in[1], batch);
+    std::vector<T> grad_params;
+    std::vector<T> grad_input = mlp_backward_ref(c, in[0], in[1], batch, trace, grad_out[0], grad_params);
+    return {grad_params, grad_input};
+  }
+
+  Arrays<float> device_forward(gpu::Context& ctx, const Params& p, const Arrays<float>& in) const override {
+    Mlp mlp(ctx, config_of(p));
+    mlp.parameters().upload(in[0]);
+    gpu::Buffer<float> input(ctx, std::span<const float>(in[1]), "mlp input");
+    Mlp::Workspace ws(mlp, std::uint32_t(p.at("batch")));
+    gpu::Stream s(ctx);
+    mlp.forward(s, ws, input);
+    s.submit_and_wait();
+    std::vector<float> out(ws.output().size / 4);
+    ws.output().buffer->read_bytes(0, out.data(), ws.output().size);
+    return {out};
+  }
+
+  Arrays<float> device_backward(gpu::Context& ctx, const Params& p, const Arrays<float>& in,
+                                const Arrays<float>& grad_out) const override {
+    Mlp mlp(ctx, config_of(p));
+    mlp.parameters().upload(in[0]);
+    const std::uint32_t batch = std::uint32_t(p.at("batch"));
+    gpu::Buffer<float> input(ctx, std::span<const float>(in[1]), "mlp input");
+    gpu::Buffer<float> grad_output(ctx, std::span<const float>(grad_out[0]), "mlp grad output");
+    gpu::Buffer<float> grad_input(ctx, in[1].size(), "mlp grad input");
+    Mlp::Workspace ws(mlp, batch);
+    gpu::Stream s(ctx);
+    mlp.forward(s, ws, input);
+    mlp.backward(s, ws, input, grad_output, grad_input, false);
+    s.submit_and_wait();
+    return {mlp.gradients().download(), grad_input.download()};
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<gradcheck::DifferentiableKernel> make_mlp_check() { return std::make_unique<MlpCheck>(); }
+
+}  // namespace nf::nn

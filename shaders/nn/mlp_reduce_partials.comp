@@ -1,0 +1,29 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// grad[p] (+)= sum over slabs of partials[slab][p]: the second half of the atomic-free parameter
+// gradient. Weights are laid out [out][in] then biases [out], as in the parameter array.
+
+layout(constant_id = 0) const uint WG = 256;
+layout(local_size_x_id = 0) in;
+#include "nf_index.glsl"
+
+layout(std430, binding = 0) readonly buffer Partials { float partials[]; };
+layout(std430, binding = 1) buffer Grads { float grads[]; };  // the whole parameter-gradient array
+
+layout(push_constant) uniform Push {
+  uint weights;  // out * in
+  uint biases;   // out
+  uint slabs;
+  uint offset;   // the layer's first parameter (its weights, then its biases follow)
+  uint accumulate;
+} pc;
+
+void main() {
+  const uint p = nf_linear_index();
+  const uint layer_params = pc.weights + pc.biases;
+  if (p >= layer_params) return;
+  float sum = 0.0;
+  for (uint sl = 0u; sl < pc.slabs; ++sl) sum += partials[sl * layer_params + p];
+  const uint g = pc.offset + p;
+  grads[g] = pc.accumulate != 0u ? grads[g] + sum : sum;
+}
