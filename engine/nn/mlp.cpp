@@ -11,8 +11,8 @@ namespace nf::nn {
 namespace {
 
 // Register blocking of mlp_forward / mlp_backward_data (a shader variant) and its workgroup.
-constexpr const char* kBlocking = "r2c4";
-constexpr std::uint32_t kRows = 2;
+constexpr const char* kBlocking = "r1c8";
+constexpr std::uint32_t kRows = 1;
 constexpr std::uint32_t kWorkgroup = 64;
 constexpr std::uint32_t kSlabItems = 32;  // samples per invocation in mlp_backward_weights
 constexpr std::uint32_t kSlab = kWorkgroup * kSlabItems;

@@ -18,8 +18,8 @@ struct Result {
   std::string output;  // stdout and stderr together
 };
 
-Result run(const std::string& args) {
-  const std::string command = std::string(NF_GPU_BINARY) + " " + args + " 2>&1";
+Result run(const std::string& args, const std::string& env = "") {
+  const std::string command = env + " " + std::string(NF_GPU_BINARY) + " " + args + " 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
   REQUIRE(pipe != nullptr);
   Result r{0, {}};
@@ -85,6 +85,13 @@ TEST_CASE("nf_gpu bench --suite core writes the roofline records") {
     if (rec["case"] == "fma_f32") CHECK(rec["metrics"]["GFLOPs_wall"].get<double>() > 0);
   }
   std::filesystem::remove(path);
+}
+
+TEST_CASE("without any Vulkan driver the error says which Debian package to install") {
+  // Point the loader at no driver at all (and no layers), as on a machine without mesa-vulkan-drivers.
+  const Result r = run("info", "VK_ICD_FILENAMES=/nonexistent.json VK_DRIVER_FILES=/nonexistent.json NF_VALIDATION=0");
+  CHECK(r.code == 3);
+  CHECK(r.output.find("mesa-vulkan-drivers") != std::string::npos);
 }
 
 TEST_CASE("usage errors exit with 2") {
