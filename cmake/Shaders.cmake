@@ -15,6 +15,8 @@ function(nf_compile_shaders target shader_root)
   foreach(src IN LISTS sources)
     file(RELATIVE_PATH rel "${shader_root}" "${src}")
     string(REGEX REPLACE "\\.comp$" "" stem "${rel}")            # module/name
+    # Variant lines are read at configure time: re-configure when a shader changes.
+    set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS "${src}")
     file(STRINGS "${src}" variant_lines REGEX "^//! variant ")
     if(NOT variant_lines)
       set(variant_lines "//! variant -")

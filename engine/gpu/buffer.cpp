@@ -20,7 +20,8 @@ Allocation allocate(Context::Impl& m, std::uint64_t bytes, std::uint32_t memory_
   a.bytes = (a.bytes + 3) & ~std::uint64_t(3);  // vkCmdFillBuffer works on whole words
   VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
   info.size = a.bytes;
-  info.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+  info.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT |
+               VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
   info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
   NF_VK_CHECK(vkCreateBuffer(m.device, &info, nullptr, &a.buffer));
   VkMemoryRequirements req;

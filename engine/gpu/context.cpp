@@ -244,13 +244,19 @@ Context::Context(const ContextOptions& options) : impl_(std::make_unique<Impl>()
     NF_VK_CHECK(vkCreatePipelineCache(m.device, &cache_info, nullptr, &m.pipeline_cache));
 
     // The shared layout: as many storage-buffer slots as the device allows, up to 16.
-    m.binding_slots = std::min<std::uint32_t>(16, m.info.limits.max_storage_buffers_per_stage);
-    std::vector<VkDescriptorSetLayoutBinding> bindings(m.binding_slots);
-    for (std::uint32_t b = 0; b < m.binding_slots; ++b)
-      bindings[b] = {b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
+    // Uniform buffers exist for data every lane reads at the same address (weights): on lavapipe a
+    // uniform-buffer load at a uniform offset is one scalar load, a storage-buffer load is a loop
+    // over the lanes.
+    m.storage_slots = std::min<std::uint32_t>(kUniformBindingBase, m.info.limits.max_storage_buffers_per_stage);
+    m.uniform_slots = std::min<std::uint32_t>(4, m.info.limits.max_uniform_buffers_per_stage);
+    std::vector<VkDescriptorSetLayoutBinding> bindings;
+    for (std::uint32_t b = 0; b < m.storage_slots; ++b)
+      bindings.push_back({b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr});
+    for (std::uint32_t b = 0; b < m.uniform_slots; ++b)
+      bindings.push_back({kUniformBindingBase + b, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr});
     VkDescriptorSetLayoutCreateInfo set_info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     if (m.tuning.use_push_descriptors) set_info.flags = VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR;
-    set_info.bindingCount = m.binding_slots;
+    set_info.bindingCount = std::uint32_t(bindings.size());
     set_info.pBindings = bindings.data();
     NF_VK_CHECK(vkCreateDescriptorSetLayout(m.device, &set_info, nullptr, &m.set_layout));
     m.push_constant_bytes = std::min<std::uint32_t>(128, m.info.limits.max_push_constants_size);

@@ -40,11 +40,13 @@ struct Context::Impl {
   VkCommandPool command_pool = VK_NULL_HANDLE;
   VkPipelineCache pipeline_cache = VK_NULL_HANDLE;
 
-  // One descriptor-set layout of `binding_slots` storage buffers shared by every kernel, and one
-  // pipeline layout with a push-constant range of `push_constant_bytes`.
+  // One descriptor-set layout shared by every kernel: `storage_slots` storage buffers at bindings
+  // 0.. and `uniform_slots` uniform buffers at kUniformBindingBase.., and one pipeline layout with a
+  // push-constant range of `push_constant_bytes`.
   VkDescriptorSetLayout set_layout = VK_NULL_HANDLE;
   VkPipelineLayout pipeline_layout = VK_NULL_HANDLE;
-  std::uint32_t binding_slots = 0;
+  std::uint32_t storage_slots = 0;
+  std::uint32_t uniform_slots = 0;
   std::uint32_t push_constant_bytes = 0;
 
   PFN_vkCmdPushDescriptorSetKHR push_descriptor = nullptr;

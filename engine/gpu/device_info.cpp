@@ -63,6 +63,9 @@ DeviceInfo describe_device(VkPhysicalDevice device, std::uint32_t index) {
   }
   lim.max_workgroup_invocations = l.maxComputeWorkGroupInvocations;
   lim.max_storage_buffers_per_stage = l.maxPerStageDescriptorStorageBuffers;
+  lim.max_uniform_buffer_range = l.maxUniformBufferRange;
+  lim.min_uniform_buffer_offset_alignment = l.minUniformBufferOffsetAlignment;
+  lim.max_uniform_buffers_per_stage = l.maxPerStageDescriptorUniformBuffers;
   lim.subgroup_size = subgroup.subgroupSize;
   lim.timestamp_period_ns = l.timestampPeriod;
 
@@ -126,6 +129,8 @@ json to_json(const DeviceInfo& info) {
         {"max_workgroup_size", l.max_workgroup_size},
         {"max_workgroup_invocations", l.max_workgroup_invocations},
         {"max_storage_buffers_per_stage", l.max_storage_buffers_per_stage},
+        {"max_uniform_buffer_range", l.max_uniform_buffer_range},
+        {"min_uniform_buffer_offset_alignment", l.min_uniform_buffer_offset_alignment},
         {"subgroup_size", l.subgroup_size},
         {"timestamp_period_ns", l.timestamp_period_ns}}},
       {"features",

@@ -21,6 +21,9 @@ struct DeviceLimits {
   std::array<std::uint32_t, 3> max_workgroup_size{};
   std::uint32_t max_workgroup_invocations = 0;
   std::uint32_t max_storage_buffers_per_stage = 0;
+  std::uint64_t max_uniform_buffer_range = 0;
+  std::uint64_t min_uniform_buffer_offset_alignment = 0;
+  std::uint32_t max_uniform_buffers_per_stage = 0;
   std::uint32_t subgroup_size = 0;
   double timestamp_period_ns = 0;  // nanoseconds per timestamp tick
 };

@@ -25,9 +25,13 @@ const Kernel& Context::kernel(const std::string& shader_name, const std::vector<
   const auto words = find_shader(shader_name);
   KernelLayout layout = reflect_spirv(words, shader_name);
   const DeviceInfo& d = m.info;
-  if (layout.bindings.size() > m.binding_slots)
-    throw DeviceError("kernel '" + shader_name + "' uses " + std::to_string(layout.bindings.size()) +
-                      " storage buffers; the shared layout on '" + d.name + "' has " + std::to_string(m.binding_slots));
+  const auto uniforms = std::count_if(layout.bindings.begin(), layout.bindings.end(),
+                                     [](const BindingInfo& b) { return b.uniform; });
+  const auto storages = std::int64_t(layout.bindings.size()) - uniforms;
+  if (storages > std::int64_t(m.storage_slots) || uniforms > std::int64_t(m.uniform_slots))
+    throw DeviceError("kernel '" + shader_name + "' uses " + std::to_string(storages) + " storage and " +
+                      std::to_string(uniforms) + " uniform buffers; the shared layout on '" + d.name + "' has " +
+                      std::to_string(m.storage_slots) + " and " + std::to_string(m.uniform_slots));
   if (layout.push_constant_size > m.push_constant_bytes)
     throw DeviceError("kernel '" + shader_name + "' needs " + std::to_string(layout.push_constant_size) +
                       " bytes of push constants; device '" + d.name + "' allows " + std::to_string(m.push_constant_bytes));

@@ -150,17 +150,24 @@ KernelLayout reflect_spirv(std::span<const std::uint32_t> words, const std::stri
       if (!bindings.count(v.id)) continue;
       if (sets[v.id] != 0) throw InternalError("shader '" + name + "': only descriptor set 0 is supported");
       // Access qualifiers sit on the variable or on every member of the block type.
-      const bool ro = non_writable[v.id] || non_writable[pointee];
-      const bool wo = non_readable[v.id] || non_readable[pointee];
-      layout.bindings.push_back({bindings[v.id], !wo, !ro});
+      // SPIR-V 1.3+ (Vulkan 1.1+) puts storage buffers in StorageBuffer, uniform buffers in Uniform.
+      const bool uniform = v.storage == StorageUniform;
+      const bool ro = uniform || non_writable[v.id] || non_writable[pointee];
+      const bool wo = !uniform && (non_readable[v.id] || non_readable[pointee]);
+      layout.bindings.push_back({bindings[v.id], uniform, !wo, !ro});
     }
   }
   std::sort(layout.bindings.begin(), layout.bindings.end(),
             [](const BindingInfo& a, const BindingInfo& b) { return a.binding < b.binding; });
-  for (std::size_t i = 0; i < layout.bindings.size(); ++i)
-    if (layout.bindings[i].binding != i)
-      throw InternalError("shader '" + name + "': bindings must be 0..N-1 without gaps (missing binding " +
-                          std::to_string(i) + ")");
+  std::uint32_t next_storage = 0, next_uniform = kUniformBindingBase;
+  for (const BindingInfo& b : layout.bindings) {
+    std::uint32_t& expected = b.uniform ? next_uniform : next_storage;
+    if (b.binding != expected)
+      throw InternalError("shader '" + name + "': " + (b.uniform ? "uniform" : "storage") + " buffer at binding " +
+                          std::to_string(b.binding) + "; storage buffers must use bindings 0..N-1 and uniform "
+                          "buffers " + std::to_string(kUniformBindingBase) + ".. without gaps");
+    ++expected;
+  }
   return layout;
 }
 

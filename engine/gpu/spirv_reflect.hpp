@@ -12,14 +12,18 @@
 
 namespace nf::gpu {
 
+// Storage buffers take bindings 0..N-1; uniform buffers kUniformBindingBase.. (see context.cpp).
+constexpr std::uint32_t kUniformBindingBase = 12;
+
 struct BindingInfo {
   std::uint32_t binding = 0;
+  bool uniform = false;  // a uniform buffer (std140 block), read-only
   bool read = true;   // false when declared writeonly
   bool write = true;  // false when declared readonly
 };
 
 struct KernelLayout {
-  std::vector<BindingInfo> bindings;      // sorted by binding, set 0 only
+  std::vector<BindingInfo> bindings;      // sorted by binding (storage, then uniform), set 0 only
   std::uint32_t push_constant_size = 0;   // bytes; 0 when there is no push block
   std::array<std::uint32_t, 3> local_size{1, 1, 1};       // defaults from the module
   std::array<std::int32_t, 3> local_size_spec_id{-1, -1, -1};  // spec id per axis, -1 if literal

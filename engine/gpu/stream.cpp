@@ -80,11 +80,12 @@ struct Stream::Impl {
 
   VkDescriptorSet allocate_set() {
     if (sets_in_current_pool == kSetsPerPool) {
-      VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kSetsPerPool * m.binding_slots};
+      const VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kSetsPerPool * m.storage_slots},
+                                            {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, kSetsPerPool * std::max(1u, m.uniform_slots)}};
       VkDescriptorPoolCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
       info.maxSets = kSetsPerPool;
-      info.poolSizeCount = 1;
-      info.pPoolSizes = &size;
+      info.poolSizeCount = 2;
+      info.pPoolSizes = sizes;
       VkDescriptorPool pool;
       NF_VK_CHECK(vkCreateDescriptorPool(m.device, &info, nullptr, &pool));
       pools.push_back(pool);
@@ -177,14 +178,20 @@ void Stream::record_dispatch(const Kernel& kernel, const BufferRange* bindings, 
       continue;
     }
     if (!r.buffer) throw InternalError("kernel '" + kernel.name() + "': binding " + std::to_string(b) + " is null");
-    if (r.size > lim.max_storage_buffer_range)
+    const bool uniform = layout.bindings[b].uniform;
+    const std::uint64_t max_range = uniform ? lim.max_uniform_buffer_range : lim.max_storage_buffer_range;
+    const std::uint64_t alignment =
+        uniform ? lim.min_uniform_buffer_offset_alignment : lim.min_storage_buffer_offset_alignment;
+    if (r.size > max_range)
       throw DeviceError("kernel '" + kernel.name() + "': binding " + std::to_string(b) + " ('" + r.buffer->name() +
-                        "') spans " + std::to_string(r.size) + " bytes, more than the device's maxStorageBufferRange " +
-                        std::to_string(lim.max_storage_buffer_range) + "; process it in chunks");
-    if (r.offset % lim.min_storage_buffer_offset_alignment)
+                        "') spans " + std::to_string(r.size) + " bytes, more than the device's " +
+                        (uniform ? "maxUniformBufferRange " : "maxStorageBufferRange ") + std::to_string(max_range) +
+                        "; process it in chunks");
+    if (r.offset % alignment)
       throw InternalError("kernel '" + kernel.name() + "': binding " + std::to_string(b) + " offset " +
-                          std::to_string(r.offset) + " is not a multiple of minStorageBufferOffsetAlignment " +
-                          std::to_string(lim.min_storage_buffer_offset_alignment));
+                          std::to_string(r.offset) + " is not a multiple of the device's " +
+                          (uniform ? "minUniformBufferOffsetAlignment " : "minStorageBufferOffsetAlignment ") +
+                          std::to_string(alignment));
     infos[b] = {r.buffer->handles().buffer, r.offset, r.size};
     const BindingInfo& access = layout.bindings[b];
     if (access.read || access.write)
@@ -198,9 +205,10 @@ void Stream::record_dispatch(const Kernel& kernel, const BufferRange* bindings, 
   }
   std::vector<VkWriteDescriptorSet> writes(count, VkWriteDescriptorSet{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET});
   for (std::size_t b = 0; b < count; ++b) {
-    writes[b].dstBinding = std::uint32_t(b);
+    const bool uniform = layout.bindings[b].uniform;
+    writes[b].dstBinding = layout.bindings[b].binding;
     writes[b].descriptorCount = 1;
-    writes[b].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    writes[b].descriptorType = uniform ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     writes[b].pBufferInfo = &infos[b];
   }
   if (count > 0) {

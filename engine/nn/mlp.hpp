@@ -1,8 +1,8 @@
 #pragma once
 // A multilayer perceptron on the GPU: training forward that keeps what the adjoint needs, the
 // adjoint to inputs and parameters (parameter gradients reduced without atomics), and streamed
-// inference over batches of any size. Tensors are feature-major (see mlp_config.hpp) except the
-// inference entry point, which takes and returns sample-major rows. Shaders: shaders/nn/mlp_*.comp.
+// inference over batches of any size. Tensors are sample-major rows padded to 4 floats (see
+// mlp_config.hpp). Shaders: shaders/nn/mlp_*.comp.
 #include <memory>
 #include <string>
 #include <vector>
@@ -19,6 +19,8 @@ class Mlp {
 
   const MlpConfig& config() const { return config_; }
   const std::vector<LayerShape>& layers() const { return layers_; }
+  std::uint32_t input_stride() const { return layers_.front().in_stride; }
+  std::uint32_t output_stride() const { return layers_.back().out_stride; }
   gpu::Buffer<float>& parameters() { return *parameters_; }
   const gpu::Buffer<float>& parameters() const { return *parameters_; }
   gpu::Buffer<float>& gradients() { return *gradients_; }
@@ -28,37 +30,48 @@ class Mlp {
    public:
     Workspace(const Mlp& mlp, std::uint32_t batch);
     std::uint32_t batch() const { return batch_; }
-    // The network output of the last forward: output_dim x batch, feature-major.
+    // The network output of the last forward: [batch][output_stride].
     gpu::BufferRange output() const { return y_.back()->whole(); }
 
    private:
     friend class Mlp;
     std::uint32_t batch_;
     std::vector<std::unique_ptr<gpu::Buffer<float>>> y_, z_;  // per layer; z_ only for Sine layers
-    std::unique_ptr<gpu::Buffer<float>> grad_a_, grad_b_, partials_;
+    std::unique_ptr<gpu::Buffer<float>> grad_a_, grad_b_, partials_, transposed_;
   };
 
-  // Records the training forward of `input` (input_dim x batch) into the workspace.
+  // Records the training forward of `input` ([batch][input_stride]) into the workspace.
   void forward(gpu::Stream& stream, Workspace& workspace, gpu::BufferRange input) const;
 
-  // Records the adjoint. grad_output: output_dim x batch. Parameter gradients are written to
+  // Records the adjoint. grad_output: [batch][output_stride]. Parameter gradients are written to
   // gradients() (added when `accumulate`). grad_input, when not empty, receives dL/dinput
-  // (input_dim x batch, or batch x input_dim when `grad_input_sample_major`).
+  // ([batch][input_stride]).
   void backward(gpu::Stream& stream, Workspace& workspace, gpu::BufferRange input, gpu::BufferRange grad_output,
-                gpu::BufferRange grad_input, bool accumulate, bool grad_input_sample_major = false);
+                gpu::BufferRange grad_input, bool accumulate);
 
-  // Records inference of sample-major `input` (batch x input_dim) into `output` (batch x output_dim),
-  // in chunks that fit the device's bindings and a bounded scratch.
+  // Records inference of `input` ([batch][input_stride]) into `output` ([batch][output_stride]) in
+  // chunks that fit the device's bindings and a bounded scratch.
   void infer(gpu::Stream& stream, gpu::BufferRange input, gpu::BufferRange output, std::uint64_t batch) const;
 
-  // Floating-point work of one forward / one backward (input and parameter adjoints) per sample.
+  // Floating-point work per sample (multiply-adds count 2), without the padding.
   double forward_flops_per_sample() const;
   double backward_flops_per_sample() const;
 
  private:
+  // y = act(W x + b) for W of out_dim rows of in_stride floats stored in `weights` from weight_offset.
+  struct Product {
+    const gpu::RawBuffer* weights;
+    std::uint64_t weight_offset;  // floats
+    std::uint32_t in_stride, out_dim, out_stride;
+    gpu::BufferRange biases;  // empty: no bias
+    ActivationSpec activation;
+  };
+  void record_product(gpu::Stream& stream, const Product& product, gpu::BufferRange x, gpu::BufferRange y,
+                      gpu::BufferRange z, std::uint32_t batch) const;
   void record_layer_forward(gpu::Stream& stream, const LayerShape& layer, gpu::BufferRange x, gpu::BufferRange y,
-                            gpu::BufferRange z, std::uint32_t batch, bool input_sample_major,
-                            bool output_sample_major) const;
+                            gpu::BufferRange z, std::uint32_t batch) const;
+  // Output rows per invocation for inputs of this stride that fit the device's uniform buffers.
+  std::uint32_t columns_for(std::uint32_t in_stride) const;
 
   gpu::Context& context_;
   MlpConfig config_;

@@ -15,8 +15,11 @@ std::vector<LayerShape> MlpConfig::layers() const {
     LayerShape s;
     s.in = in;
     s.out = l < hidden.size() ? hidden[l] : output_dim;
-    s.weight_offset = offset;
-    s.bias_offset = offset + std::uint64_t(s.in) * s.out;
+    s.in_stride = pad4(s.in);
+    s.out_stride = pad4(s.out);
+    s.weight_offset = (offset + kLayerAlignment - 1) / kLayerAlignment * kLayerAlignment;
+    const std::uint64_t weights_end = s.weight_offset + std::uint64_t(s.in_stride) * s.out;
+    s.bias_offset = (weights_end + kLayerAlignment - 1) / kLayerAlignment * kLayerAlignment;
     s.activation = l < hidden.size() ? hidden_activation : output_activation;
     offset = s.bias_offset + s.out;
     in = s.out;

@@ -1,8 +1,14 @@
 #pragma once
 // Shape of a multilayer perceptron: layer widths, activations and where each layer's parameters
-// live in one flat parameter array (per layer: weights [out][in] row-major, then biases [out]).
-// Activations and batches are feature-major on the GPU: a tensor of F features for B samples is
-// F rows of B floats, so consecutive invocations (samples) touch consecutive addresses.
+// live in one flat parameter array.
+//
+// Layout (shared by the GPU kernels and the CPU reference):
+// - a batch of F features is B rows of pad4(F) floats (sample-major; the padding holds zeros), so an
+//   invocation reads its sample's features four at a time;
+// - per layer: weights [out][pad4(in)] row-major (padding columns zero), then biases [out]; both
+//   blocks start on a multiple of 64 floats, so blocks of weight rows and the biases can be bound as
+//   uniform buffers on any device (minUniformBufferOffsetAlignment <= 256 bytes). Alignment gaps
+//   are unused zeros.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -19,8 +25,12 @@ struct ActivationSpec {
   float omega = 30.f;   // Sine (SIREN): sin(omega x)
 };
 
+constexpr std::uint32_t pad4(std::uint32_t n) { return (n + 3u) & ~3u; }
+constexpr std::uint64_t kLayerAlignment = 64;  // floats
+
 struct LayerShape {
   std::uint32_t in = 0, out = 0;
+  std::uint32_t in_stride = 0, out_stride = 0;  // pad4(in), pad4(out): row lengths of x and y
   std::uint64_t weight_offset = 0, bias_offset = 0;  // in floats, into the parameter array
   ActivationSpec activation;
 };

@@ -1,7 +1,8 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// grad[p] (+)= sum over slabs of partials[slab][p]: the second half of the atomic-free parameter
-// gradient. Weights are laid out [out][in] then biases [out], as in the parameter array.
+// grad (+)= sum over slabs of partials[slab][p]: the second half of the atomic-free parameter
+// gradient. Partials hold a layer's weights [out][in_stride] then its biases [out]; in the gradient
+// array they go to the layer's weight and bias offsets.
 
 layout(constant_id = 0) const uint WG = 256;
 layout(local_size_x_id = 0) in;
@@ -11,10 +12,11 @@ layout(std430, binding = 0) readonly buffer Partials { float partials[]; };
 layout(std430, binding = 1) buffer Grads { float grads[]; };  // the whole parameter-gradient array
 
 layout(push_constant) uniform Push {
-  uint weights;  // out * in
+  uint weights;  // out * in_stride
   uint biases;   // out
   uint slabs;
-  uint offset;   // the layer's first parameter (its weights, then its biases follow)
+  uint weight_offset;
+  uint bias_offset;
   uint accumulate;
 } pc;
 
@@ -24,6 +26,6 @@ void main() {
   if (p >= layer_params) return;
   float sum = 0.0;
   for (uint sl = 0u; sl < pc.slabs; ++sl) sum += partials[sl * layer_params + p];
-  const uint g = pc.offset + p;
+  const uint g = p < pc.weights ? pc.weight_offset + p : pc.bias_offset + (p - pc.weights);
   grads[g] = pc.accumulate != 0u ? grads[g] + sum : sum;
 }
