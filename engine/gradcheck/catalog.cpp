@@ -1,5 +1,6 @@
 #include "engine/gradcheck/catalog.hpp"
 
+#include "engine/nn/encoding_gradcheck.hpp"
 #include "engine/nn/mlp_gradcheck.hpp"
 #include "engine/splat/segment_gaussian_gradcheck.hpp"
 
@@ -8,6 +9,7 @@ namespace nf::gradcheck {
 std::vector<std::unique_ptr<DifferentiableKernel>> all_kernels() {
   std::vector<std::unique_ptr<DifferentiableKernel>> kernels;
   kernels.push_back(nn::make_mlp_check());
+  kernels.push_back(nn::make_frequency_encoding_check());
   kernels.push_back(splat::make_segment_gaussian_check());
   return kernels;
 }

@@ -1,0 +1,104 @@
+// Hard cases of the nn kernels: precision of the frequency encoding far from the origin, zero-size
+// batches, batches that are not a multiple of the workgroup, Softplus at huge beta*x.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <random>
+
+#include "engine/nn/frequency_encoding.hpp"
+#include "engine/nn/mlp.hpp"
+#include "engine/nn/mlp_ref.hpp"
+#include "tests/support/gpu_test.hpp"
+
+using namespace nf;
+using namespace nf::nn;
+
+TEST_CASE("frequency encoding keeps float accuracy for |x| up to 1e3 at 2^9") {
+  auto& ctx = test::context();
+  const FrequencyEncodingConfig c{3, 10, false};
+  const std::uint32_t batch = 1000;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1000.f, 1000.f);
+  std::vector<float> pts(batch * 3);
+  for (float& x : pts) x = u(rng);
+  gpu::Buffer<float> points(ctx, std::span<const float>(pts), "points");
+  gpu::Buffer<float> encoded(ctx, std::uint64_t(c.output_stride()) * batch, "encoded");
+  gpu::Stream s(ctx);
+  FrequencyEncoding(c).forward(s, points, encoded, batch);
+  s.submit_and_wait();
+  const auto got = encoded.download();
+  const std::vector<double> pts_d(pts.begin(), pts.end());
+  const auto truth = frequency_encoding_forward_ref<double>(c, pts_d, batch);
+  double worst = 0;
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    REQUIRE(std::isfinite(got[i]));
+    worst = std::max(worst, std::fabs(double(got[i]) - truth[i]));
+  }
+  CHECK(worst < 2e-6);  // against the exact sin/cos of the float input, in double
+}
+
+TEST_CASE("an MLP handles empty batches and batches of any size") {
+  auto& ctx = test::context();
+  MlpConfig c;
+  c.input_dim = 3;
+  c.hidden = {16};
+  c.output_dim = 2;
+  Mlp mlp(ctx, c);
+  std::vector<float> params(c.parameter_count(), 0.f);
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<float> u(-0.5f, 0.5f);
+  for (const LayerShape& l : c.layers())
+    for (std::uint32_t o = 0; o < l.out; ++o) {
+      for (std::uint32_t k = 0; k < l.in; ++k) params[l.weight_offset + o * l.in_stride + k] = u(rng);
+      params[l.bias_offset + o] = u(rng);
+    }
+  mlp.parameters().upload(params);
+  for (std::uint32_t batch : {0u, 1u, 63u, 65u, 1000u}) {
+    CAPTURE(batch);
+    std::vector<float> in(std::size_t(mlp.input_stride()) * batch, 0.f);
+    for (std::uint32_t s = 0; s < batch; ++s)
+      for (std::uint32_t k = 0; k < 3; ++k) in[s * mlp.input_stride() + k] = u(rng);
+    gpu::Buffer<float> input(ctx, std::span<const float>(in), "input");
+    gpu::Buffer<float> output(ctx, std::uint64_t(mlp.output_stride()) * batch, "output");
+    gpu::Stream s(ctx);
+    mlp.infer(s, input, output, batch);
+    s.submit_and_wait();
+    const auto got = output.download();
+    const auto ref = mlp_forward_ref<float>(c, params, in, batch).y.back();
+    REQUIRE(got.size() == ref.size());
+    for (std::size_t i = 0; i < got.size(); ++i) CHECK(got[i] == doctest::Approx(ref[i]).epsilon(1e-5));
+  }
+}
+
+TEST_CASE("Softplus at huge beta*x stays finite, forward and backward") {
+  auto& ctx = test::context();
+  MlpConfig c;
+  c.input_dim = 1;
+  c.hidden = {4};
+  c.output_dim = 1;
+  c.hidden_activation = {Activation::Softplus, 100.f, 30.f};
+  Mlp mlp(ctx, c);
+  std::vector<float> params(c.parameter_count(), 0.f);
+  const LayerShape l0 = c.layers()[0], l1 = c.layers()[1];
+  for (std::uint32_t o = 0; o < 4; ++o) params[l0.weight_offset + o * l0.in_stride] = o % 2 ? 1e3f : -1e3f;
+  for (std::uint32_t k = 0; k < 4; ++k) params[l1.weight_offset + k] = 1.f;
+  mlp.parameters().upload(params);
+  const std::uint32_t batch = 3;
+  std::vector<float> in = {1e3f, 0, 0, 0, -1e3f, 0, 0, 0, 0.f, 0, 0, 0};
+  gpu::Buffer<float> input(ctx, std::span<const float>(in), "input");
+  std::vector<float> ones(std::size_t(mlp.output_stride()) * batch, 0.f);
+  for (std::uint32_t s = 0; s < batch; ++s) ones[s * mlp.output_stride()] = 1.f;
+  gpu::Buffer<float> grad_out(ctx, std::span<const float>(ones), "grad out");
+  gpu::Buffer<float> grad_in(ctx, std::uint64_t(mlp.input_stride()) * batch, "grad in");
+  Mlp::Workspace ws(mlp, batch);
+  gpu::Stream s(ctx);
+  mlp.forward(s, ws, input);
+  mlp.backward(s, ws, input, grad_out, grad_in, false);
+  s.submit_and_wait();
+  std::vector<float> out(ws.output().size / 4);
+  ws.output().buffer->read_bytes(0, out.data(), ws.output().size);
+  for (float v : out) CHECK(std::isfinite(v));
+  for (float v : grad_in.download()) CHECK(std::isfinite(v));
+  for (float v : mlp.gradients().download()) CHECK(std::isfinite(v));
+  CHECK(out[0] == doctest::Approx(2e6).epsilon(1e-4));  // two units pass 1e6 each, two are ~0
+}
