@@ -10,6 +10,7 @@ std::vector<std::unique_ptr<DifferentiableKernel>> all_kernels() {
   std::vector<std::unique_ptr<DifferentiableKernel>> kernels;
   kernels.push_back(nn::make_mlp_check());
   kernels.push_back(nn::make_frequency_encoding_check());
+  kernels.push_back(nn::make_hash_grid_check());
   kernels.push_back(splat::make_segment_gaussian_check());
   return kernels;
 }

@@ -52,6 +52,31 @@ void compare(std::vector<Row>& rows, const Row& base, const std::vector<std::str
   }
 }
 
+// As compare, for gradients against finite differences: arrays whose step is 0 were not probed and
+// get a skipped row with the case's reason instead.
+template <class A>
+void compare_probed(std::vector<Row>& rows, const Row& base, const std::vector<std::string>& names,
+                    const std::vector<double>& steps, const std::string& reason, const Arrays<A>& got,
+                    const Arrays<double>& fd, double tolerance) {
+  Arrays<A> probed_got;
+  Arrays<double> probed_fd;
+  std::vector<std::string> probed_names;
+  for (std::size_t a = 0; a < names.size(); ++a) {
+    if (steps[a] > 0) {
+      probed_got.push_back(got[a]);
+      probed_fd.push_back(fd[a]);
+      probed_names.push_back(names[a]);
+      continue;
+    }
+    Row skip = base;
+    skip.array = names[a];
+    skip.skipped = true;
+    skip.note = reason.empty() ? "not probed" : reason;
+    rows.push_back(skip);
+  }
+  if (!probed_names.empty()) compare(rows, base, probed_names, probed_got, probed_fd, tolerance);
+}
+
 double weighted_sum(const Arrays<double>& weights, const Arrays<double>& out) {
   double s = 0;
   for (std::size_t a = 0; a < out.size(); ++a)
@@ -124,35 +149,12 @@ std::vector<Row> run_checks(gpu::Context& context, const DifferentiableKernel& k
     const Arrays<double> ref_grad = kernel.reference_backward(c.params, in_d, weights);
     const Arrays<double> fd_d = finite_differences<double>(
         in_d, c.step_double, weights, [&](const Arrays<double>& x) { return kernel.reference_forward(c.params, x); });
-    compare(rows, base, in_names, ref_grad, fd_d, tol.reference_fd);
+    compare_probed(rows, base, in_names, c.step_double, c.skip_reason, ref_grad, fd_d, tol.reference_fd);
 
     base.check = "4 adj gpu~fd32";
-    std::vector<std::size_t> resolvable;
-    for (std::size_t a = 0; a < in_names.size(); ++a)
-      if (c.step_float[a] > 0) resolvable.push_back(a);
-    if (resolvable.size() < in_names.size()) {
-      for (std::size_t a = 0; a < in_names.size(); ++a) {
-        if (c.step_float[a] > 0) continue;
-        Row skip = base;
-        skip.array = in_names[a];
-        skip.skipped = true;
-        skip.note = c.float_skip_reason.empty() ? "float cannot resolve the step" : c.float_skip_reason;
-        rows.push_back(skip);
-      }
-    }
-    if (!resolvable.empty()) {
-      const Arrays<double> fd_f = finite_differences<float>(
-          in_f, c.step_float, weights, [&](const Arrays<float>& x) { return kernel.device_forward(context, c.params, x); });
-      Arrays<float> got;
-      Arrays<double> expected;
-      std::vector<std::string> names;
-      for (std::size_t a : resolvable) {
-        got.push_back(gpu_grad[a]);
-        expected.push_back(fd_f[a]);
-        names.push_back(in_names[a]);
-      }
-      compare(rows, base, names, got, expected, tol.device_fd);
-    }
+    const Arrays<double> fd_f = finite_differences<float>(
+        in_f, c.step_float, weights, [&](const Arrays<float>& x) { return kernel.device_forward(context, c.params, x); });
+    compare_probed(rows, base, in_names, c.step_float, c.skip_reason, gpu_grad, fd_f, tol.device_fd);
   }
   return rows;
 }

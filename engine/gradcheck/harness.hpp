@@ -32,9 +32,9 @@ struct Case {
   std::string name;
   Params params;                     // non-differentiable settings of the kernel
   Arrays<double> inputs;
-  std::vector<double> step_double;   // central-difference step per input array (check 3)
-  std::vector<double> step_float;    // per input array for check 4; 0 skips it (float cannot resolve)
-  std::string float_skip_reason;     // why check 4 is skipped, when it is
+  std::vector<double> step_double;   // central-difference step per input array (check 3); 0 skips it
+  std::vector<double> step_float;    // per input array for check 4; 0 skips it
+  std::string skip_reason;           // why a check is skipped (a kink, float resolution...), when one is
 };
 
 class DifferentiableKernel {

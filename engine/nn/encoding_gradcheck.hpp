@@ -7,5 +7,6 @@
 namespace nf::nn {
 
 std::unique_ptr<gradcheck::DifferentiableKernel> make_frequency_encoding_check();
+std::unique_ptr<gradcheck::DifferentiableKernel> make_hash_grid_check();
 
 }  // namespace nf::nn

@@ -1,0 +1,63 @@
+#include "engine/nn/hash_grid.hpp"
+
+#include <random>
+
+#include "engine/core/error.hpp"
+#include "engine/gpu/context.hpp"
+#include "engine/gpu/kernel.hpp"
+
+namespace nf::nn {
+namespace {
+
+struct HashGridPush {
+  std::uint32_t batch, levels, features, log2_table, out_stride, dense_mask, has_grad_points, accumulate_points;
+  std::uint32_t resolution[16];
+};
+constexpr std::uint32_t kWorkgroup = 64;
+
+HashGridPush make_push(const HashGridConfig& c, std::uint32_t batch) {
+  HashGridPush p{batch, c.levels, c.features, c.log2_table, c.output_stride(), 0, 0, 0, {}};
+  for (std::uint32_t l = 0; l < c.levels; ++l) {
+    p.resolution[l] = c.resolution(l);
+    if (c.dense(l)) p.dense_mask |= 1u << l;
+  }
+  return p;
+}
+
+}  // namespace
+
+HashGrid::HashGrid(const HashGridConfig& c) : config_(c) {
+  if (c.levels < 1 || c.levels > 16) throw InputError("hash grid levels must be 1..16, got " + std::to_string(c.levels));
+  if (c.features != 1 && c.features != 2 && c.features != 4)
+    throw InputError("hash grid features per level must be 1, 2 or 4, got " + std::to_string(c.features));
+  if (c.log2_table < 4 || c.log2_table > 24)
+    throw InputError("hash grid log2_table must be 4..24, got " + std::to_string(c.log2_table));
+  if (c.base_resolution < 1 || c.max_resolution < c.base_resolution || c.max_resolution > (1u << 20))
+    throw InputError("hash grid resolutions must satisfy 1 <= base_resolution <= max_resolution <= 2^20");
+}
+
+std::vector<float> HashGrid::initial_table(unsigned seed) const {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-1e-4f, 1e-4f);
+  std::vector<float> t(config_.parameter_count());
+  for (float& x : t) x = u(rng);
+  return t;
+}
+
+void HashGrid::forward(gpu::Stream& stream, gpu::BufferRange points, gpu::BufferRange table, gpu::BufferRange encoded,
+                       std::uint32_t batch) const {
+  const gpu::Kernel& k = stream.context().kernel("nn/hash_grid_fwd", {{0, kWorkgroup}});
+  stream.dispatch(k, {points, table, encoded}, make_push(config_, batch), gpu::Elements(batch));
+}
+
+void HashGrid::backward(gpu::Stream& stream, gpu::BufferRange points, gpu::BufferRange table,
+                        gpu::BufferRange grad_encoded, gpu::BufferRange grad_table, gpu::BufferRange grad_points,
+                        std::uint32_t batch, bool accumulate_points) const {
+  const gpu::Kernel& k = stream.context().kernel("nn/hash_grid_bwd", {{0, kWorkgroup}});
+  HashGridPush push = make_push(config_, batch);
+  push.has_grad_points = grad_points.size ? 1u : 0u;
+  push.accumulate_points = accumulate_points ? 1u : 0u;
+  stream.dispatch(k, {points, table, grad_encoded, grad_table, grad_points}, push, gpu::Elements(batch));
+}
+
+}  // namespace nf::nn
