@@ -1,0 +1,30 @@
+#include "engine/nn/loss.hpp"
+
+#include "engine/gpu/chunking.hpp"
+#include "engine/gpu/context.hpp"
+#include "engine/gpu/kernel.hpp"
+#include "engine/gpu/reduce.hpp"
+
+namespace nf::nn {
+namespace {
+struct MsePush {
+  std::uint32_t batch, dims, stride;
+};
+}  // namespace
+
+void mse_loss(gpu::Stream& stream, gpu::BufferRange prediction, gpu::BufferRange target, gpu::BufferRange grad,
+              gpu::BufferRange loss, std::uint32_t batch, std::uint32_t dims, std::uint32_t stride) {
+  const std::uint32_t wg = gpu::primitive_workgroup(stream.context(), 256);
+  const gpu::Kernel& k = stream.context().kernel("nn/loss_mse", {{0, wg}});
+  const std::uint64_t count = std::uint64_t(batch) * stride;
+  if (count == 0) {
+    stream.fill(gpu::sub_range(loss, 4, 0, 1), 0);
+    return;
+  }
+  const std::uint64_t groups = std::max<std::uint64_t>(1, (count + wg - 1) / wg);
+  const gpu::BufferRange partials = stream.scratch(groups * 4, "loss partials");
+  stream.dispatch(k, {prediction, target, grad, partials}, MsePush{batch, dims, stride}, gpu::Elements(groups * wg));
+  gpu::reduce(stream, gpu::ReduceOp::Sum, gpu::ScalarType::F32, partials, gpu::sub_range(loss, 4, 0, 1));
+}
+
+}  // namespace nf::nn
