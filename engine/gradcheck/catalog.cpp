@@ -1,6 +1,7 @@
 #include "engine/gradcheck/catalog.hpp"
 
 #include "engine/nn/encoding_gradcheck.hpp"
+#include "engine/nn/loss_gradcheck.hpp"
 #include "engine/nn/mlp_gradcheck.hpp"
 #include "engine/splat/segment_gaussian_gradcheck.hpp"
 
@@ -11,6 +12,7 @@ std::vector<std::unique_ptr<DifferentiableKernel>> all_kernels() {
   kernels.push_back(nn::make_mlp_check());
   kernels.push_back(nn::make_frequency_encoding_check());
   kernels.push_back(nn::make_hash_grid_check());
+  kernels.push_back(nn::make_mse_loss_check());
   kernels.push_back(splat::make_segment_gaussian_check());
   return kernels;
 }

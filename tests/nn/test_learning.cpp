@@ -35,7 +35,7 @@ void sample(std::mt19937& rng, std::uint32_t n, std::vector<float>& points, std:
 
 }  // namespace
 
-TEST_CASE("hash grid + MLP + AdamW fit a sphere SDF to 1% of the box in 300 steps") {
+TEST_CASE("hash grid + MLP + AdamW fit a sphere SDF to 0.3% of the box in 300 steps") {
   auto& ctx = test::context();
   HashGridConfig gc;
   gc.levels = 8;
@@ -102,7 +102,7 @@ TEST_CASE("hash grid + MLP + AdamW fit a sphere SDF to 1% of the box in 300 step
   mae /= batch;
   MESSAGE("sphere SDF after " << steps << " steps: mean abs error " << mae << " (box side 1), loss " << first_loss
                               << " -> " << last_loss);
-  CHECK(mae < 0.01);
+  CHECK(mae < 0.003);  // measured 7e-4 on lavapipe
   CHECK(mlp_adam.counters().taken == steps);
   CHECK(table_adam.counters().skipped == 0);
 }
