@@ -115,6 +115,8 @@ int main(int argc, char** argv) {
   bench->add_option("--suite", bench_options.suite, "suite to run")->check(CLI::IsMember(nf::bench::suite_names()));
   bench->add_option("--json", bench_json, "also write the records to this file");
   bench->add_flag("--quick", bench_options.quick, "smaller sizes and fewer repeats (smoke run)");
+  bench->add_option("--torch-peer", bench_options.torch_peer,
+                    "tools/bench_torch_nn.py: time PyTorch on the CPU as a peer (suite nn)");
 
   try {
     app.parse(argc, argv);

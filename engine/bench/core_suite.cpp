@@ -210,6 +210,11 @@ json scan_reduce_records(gpu::Context& ctx, bool quick, int repeats) {
 
 }  // namespace
 
+double measure_fma_gflops(gpu::Context& context, bool quick) {
+  const json r = fma_record(context, quick, 3);
+  return r["metrics"]["GFLOPs_wall"].get<double>();
+}
+
 json run_core_suite(gpu::Context& context, const Options& options) {
   const int repeats = options.quick ? 3 : 7;
   json records = json::array();

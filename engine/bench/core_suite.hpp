@@ -7,4 +7,8 @@ namespace nf::bench {
 
 json run_core_suite(gpu::Context& context, const Options& options);
 
+// The device's measured fp32 FMA rate (GFLOP/s, median of a few runs): the roofline other suites
+// report their share of.
+double measure_fma_gflops(gpu::Context& context, bool quick);
+
 }  // namespace nf::bench

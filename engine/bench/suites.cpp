@@ -1,15 +1,17 @@
 #include "engine/bench/suites.hpp"
 
 #include "engine/bench/core_suite.hpp"
+#include "engine/bench/nn_suite.hpp"
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
 
 namespace nf::bench {
 
-std::vector<std::string> suite_names() { return {"core"}; }
+std::vector<std::string> suite_names() { return {"core", "nn"}; }
 
 json run_suite(gpu::Context& context, const Options& options) {
   if (options.suite == "core") return run_core_suite(context, options);
+  if (options.suite == "nn") return run_nn_suite(context, options);
   throw UsageError("unknown bench suite '" + options.suite + "'");
 }
 

@@ -16,7 +16,8 @@ namespace nf::bench {
 
 struct Options {
   std::string suite = "core";
-  bool quick = false;  // smaller sizes and fewer repeats: a smoke run
+  bool quick = false;       // smaller sizes and fewer repeats: a smoke run
+  std::string torch_peer;   // path of tools/bench_torch_nn.py: run PyTorch on the CPU as a peer
 };
 
 std::vector<std::string> suite_names();
