@@ -52,6 +52,31 @@ void hash_grid_cell(T x, std::uint32_t n, std::uint32_t& cell, T& frac) {
   frac = p - T(cell);
 }
 
+// One of the 8 vertices of the cell holding point s at level l: its table entry (first feature),
+// trilinear weight and the weight's derivative along each axis (per unit of x, before scaling by N).
+template <class T>
+struct HashGridCorner {
+  std::uint64_t entry;
+  T weight;
+  T dweight[3];
+};
+
+template <class T>
+HashGridCorner<T> hash_grid_corner(const HashGridConfig& c, std::uint32_t level, const std::uint32_t cell[3],
+                                   const T frac[3], std::uint32_t corner) {
+  HashGridCorner<T> k{0, T(1), {T(1), T(1), T(1)}};
+  std::uint32_t v[3];
+  for (int a = 0; a < 3; ++a) {
+    const bool up = (corner >> a) & 1u;
+    const T wa = up ? frac[a] : T(1) - frac[a];
+    k.weight *= wa;
+    for (int b = 0; b < 3; ++b) k.dweight[b] *= b == a ? (up ? T(1) : T(-1)) : wa;
+    v[a] = cell[a] + (up ? 1u : 0u);
+  }
+  k.entry = (std::uint64_t(level) * c.table_size() + hash_grid_index(c, level, v[0], v[1], v[2])) * c.features;
+  return k;
+}
+
 // points: [batch][3]; table: parameter_count(); returns [batch][output_stride].
 template <class T>
 std::vector<T> hash_grid_forward_ref(const HashGridConfig& c, const std::vector<T>& points, const std::vector<T>& table,
@@ -59,21 +84,13 @@ std::vector<T> hash_grid_forward_ref(const HashGridConfig& c, const std::vector<
   std::vector<T> out(std::size_t(c.output_stride()) * batch, T(0));
   for (std::uint32_t s = 0; s < batch; ++s)
     for (std::uint32_t l = 0; l < c.levels; ++l) {
-      const std::uint32_t n = c.resolution(l);
       std::uint32_t cell[3];
       T frac[3];
-      for (int a = 0; a < 3; ++a) hash_grid_cell(points[std::size_t(s) * 3 + a], n, cell[a], frac[a]);
+      for (int a = 0; a < 3; ++a) hash_grid_cell(points[std::size_t(s) * 3 + a], c.resolution(l), cell[a], frac[a]);
       for (std::uint32_t corner = 0; corner < 8; ++corner) {
-        T w = 1;
-        std::uint32_t v[3];
-        for (int a = 0; a < 3; ++a) {
-          const bool up = (corner >> a) & 1u;
-          w *= up ? frac[a] : T(1) - frac[a];
-          v[a] = cell[a] + (up ? 1u : 0u);
-        }
-        const std::uint64_t e = (std::uint64_t(l) * c.table_size() + hash_grid_index(c, l, v[0], v[1], v[2])) * c.features;
+        const HashGridCorner<T> k = hash_grid_corner(c, l, cell, frac, corner);
         for (std::uint32_t f = 0; f < c.features; ++f)
-          out[std::size_t(s) * c.output_stride() + l * c.features + f] += w * table[e + f];
+          out[std::size_t(s) * c.output_stride() + l * c.features + f] += k.weight * table[k.entry + f];
       }
     }
   return out;
@@ -92,22 +109,13 @@ std::vector<T> hash_grid_backward_ref(const HashGridConfig& c, const std::vector
       T frac[3];
       for (int a = 0; a < 3; ++a) hash_grid_cell(points[std::size_t(s) * 3 + a], n, cell[a], frac[a]);
       for (std::uint32_t corner = 0; corner < 8; ++corner) {
-        T w = 1, dw[3] = {1, 1, 1};
-        std::uint32_t v[3];
-        for (int a = 0; a < 3; ++a) {
-          const bool up = (corner >> a) & 1u;
-          const T wa = up ? frac[a] : T(1) - frac[a];
-          w *= wa;
-          for (int b = 0; b < 3; ++b) dw[b] *= b == a ? (up ? T(1) : T(-1)) : wa;
-          v[a] = cell[a] + (up ? 1u : 0u);
-        }
-        const std::uint64_t e = (std::uint64_t(l) * c.table_size() + hash_grid_index(c, l, v[0], v[1], v[2])) * c.features;
+        const HashGridCorner<T> k = hash_grid_corner(c, l, cell, frac, corner);
         for (std::uint32_t f = 0; f < c.features; ++f) {
           const T g = grad_out[std::size_t(s) * c.output_stride() + l * c.features + f];
-          grad_table[e + f] += w * g;
+          grad_table[k.entry + f] += k.weight * g;
           for (int a = 0; a < 3; ++a) {
             const T x = points[std::size_t(s) * 3 + a];
-            if (x >= T(0) && x <= T(1)) grad_points[std::size_t(s) * 3 + a] += g * table[e + f] * dw[a] * T(n);
+            if (x >= T(0) && x <= T(1)) grad_points[std::size_t(s) * 3 + a] += g * table[k.entry + f] * k.dweight[a] * T(n);
           }
         }
       }
