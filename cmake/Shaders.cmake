@@ -34,6 +34,8 @@ function(nf_compile_shaders target shader_root)
       string(REPLACE ":" "." file_key "${key}")
       set(header "${out_dir}/${file_key}.h")
       set(depfile "${out_dir}/${file_key}.d")
+      get_filename_component(header_dir "${header}" DIRECTORY)
+      file(MAKE_DIRECTORY "${header_dir}")  # Makefile generators do not create output folders
       add_custom_command(
         OUTPUT "${header}"
         COMMAND ${NF_GLSLANG} --target-env vulkan1.2 -I${shader_root}/include

@@ -7,13 +7,26 @@
 namespace nf::gpu {
 namespace {
 
+constexpr VkMemoryPropertyFlags kHostMemory = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+
 struct Allocation {
   VkBuffer buffer = VK_NULL_HANDLE;
   VkDeviceMemory memory = VK_NULL_HANDLE;
   std::uint64_t bytes = 0;
+  std::uint32_t memory_type = 0;
 };
 
-Allocation allocate(Context::Impl& m, std::uint64_t bytes, std::uint32_t memory_type, const std::string& name) {
+// The first memory type the buffer accepts that has all `wanted` properties, else one with `fallback`.
+std::uint32_t pick_memory_type(const Context::Impl& m, std::uint32_t allowed, VkMemoryPropertyFlags wanted,
+                               VkMemoryPropertyFlags fallback) {
+  for (VkMemoryPropertyFlags flags : {wanted, fallback})
+    for (std::uint32_t i = 0; i < m.memory_properties.memoryTypeCount; ++i)
+      if ((allowed & (1u << i)) && (m.memory_properties.memoryTypes[i].propertyFlags & flags) == flags) return i;
+  return ~0u;
+}
+
+Allocation allocate(Context::Impl& m, std::uint64_t bytes, VkMemoryPropertyFlags wanted, VkMemoryPropertyFlags fallback,
+                    const std::string& name) {
   Allocation a;
   // Vulkan forbids empty buffers; an empty nf buffer still owns a small allocation.
   a.bytes = std::max<std::uint64_t>(bytes, 16);
@@ -26,13 +39,15 @@ Allocation allocate(Context::Impl& m, std::uint64_t bytes, std::uint32_t memory_
   NF_VK_CHECK(vkCreateBuffer(m.device, &info, nullptr, &a.buffer));
   VkMemoryRequirements req;
   vkGetBufferMemoryRequirements(m.device, a.buffer, &req);
-  if (!(req.memoryTypeBits & (1u << memory_type))) {
+  const std::uint32_t memory_type = pick_memory_type(m, req.memoryTypeBits, wanted, fallback);
+  if (memory_type == ~0u) {
     vkDestroyBuffer(m.device, a.buffer, nullptr);
-    throw DeviceError("buffer '" + name + "': the chosen memory type cannot hold storage buffers on this device");
+    throw DeviceError("buffer '" + name + "': no memory type of this device can hold it");
   }
   VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
   alloc.allocationSize = req.size;
   alloc.memoryTypeIndex = memory_type;
+  a.memory_type = memory_type;
   const VkResult r = vkAllocateMemory(m.device, &alloc, nullptr, &a.memory);
   if (r != VK_SUCCESS) {
     vkDestroyBuffer(m.device, a.buffer, nullptr);
@@ -42,10 +57,16 @@ Allocation allocate(Context::Impl& m, std::uint64_t bytes, std::uint32_t memory_
                         " bytes already");
     NF_VK_CHECK(r);
   }
-  NF_VK_CHECK(vkBindBufferMemory(m.device, a.buffer, a.memory, 0));
-  m.name_object(VK_OBJECT_TYPE_BUFFER, std::uint64_t(a.buffer), name);
-  m.note_allocation(std::int64_t(req.size));
   a.bytes = req.size;
+  m.note_allocation(std::int64_t(req.size));
+  const VkResult bound = vkBindBufferMemory(m.device, a.buffer, a.memory, 0);
+  if (bound != VK_SUCCESS) {
+    vkDestroyBuffer(m.device, a.buffer, nullptr);
+    vkFreeMemory(m.device, a.memory, nullptr);
+    m.note_allocation(-std::int64_t(a.bytes));
+    NF_VK_CHECK(bound);
+  }
+  m.name_object(VK_OBJECT_TYPE_BUFFER, std::uint64_t(a.buffer), name);
   return a;
 }
 
@@ -63,8 +84,13 @@ struct Staging {
   Context::Impl& m;
   Allocation a;
   void* data = nullptr;
-  Staging(Context::Impl& impl, std::uint64_t bytes) : m(impl), a(allocate(impl, bytes, impl.staging_memory_type, "staging")) {
-    NF_VK_CHECK(vkMapMemory(m.device, a.memory, 0, VK_WHOLE_SIZE, 0, &data));
+  Staging(Context::Impl& impl, std::uint64_t bytes)
+      : m(impl), a(allocate(impl, bytes, kHostMemory, kHostMemory, "staging")) {
+    const VkResult mapped = vkMapMemory(m.device, a.memory, 0, VK_WHOLE_SIZE, 0, &data);
+    if (mapped != VK_SUCCESS) {
+      free_allocation(m, a);  // a constructor that throws runs no destructor
+      NF_VK_CHECK(mapped);
+    }
   }
   ~Staging() { free_allocation(m, a); }
   Staging(const Staging&) = delete;
@@ -72,6 +98,13 @@ struct Staging {
 };
 
 }  // namespace
+
+void require_bytes(const BufferRange& range, std::uint64_t bytes, const std::string& what) {
+  if (range.size < bytes)
+    throw InternalError(what + ": range of " + std::to_string(range.size) + " bytes" +
+                        (range.buffer ? " in '" + range.buffer->name() + "'" : std::string()) + ", " +
+                        std::to_string(bytes) + " needed");
+}
 
 RawBuffer::RawBuffer(Context& context, std::uint64_t bytes, std::string name)
     : context_(&context), bytes_(bytes), name_(std::move(name)) {
@@ -81,10 +114,14 @@ RawBuffer::RawBuffer(Context& context, std::uint64_t bytes, std::string name)
     throw DeviceError("buffer '" + name_ + "' needs " + std::to_string(bytes) + " bytes but device '" + m.info.name +
                       "' allows at most " + std::to_string(lim.max_allocation_size) +
                       " per allocation; split the data or lower its size");
-  const bool mapped = m.mapped_memory_type != ~0u;
-  Allocation a = allocate(m, bytes, mapped ? m.mapped_memory_type : m.device_memory_type, name_);
+  // Mapped device memory where the tuning asks for it (lavapipe, integrated GPUs), else device-local.
+  const VkMemoryPropertyFlags device_local = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
+  const bool want_mapped = m.tuning.mapped_device_buffers;
+  Allocation a = want_mapped ? allocate(m, bytes, device_local | kHostMemory, kHostMemory, name_)
+                             : allocate(m, bytes, device_local, 0, name_);
   handles_ = new Handles{a.buffer, a.memory, a.bytes};
-  if (mapped) {
+  const VkMemoryPropertyFlags got = m.memory_properties.memoryTypes[a.memory_type].propertyFlags;
+  if (want_mapped && (got & kHostMemory) == kHostMemory) {
     try {
       NF_VK_CHECK(vkMapMemory(m.device, a.memory, 0, VK_WHOLE_SIZE, 0, &mapped_));
     } catch (...) {

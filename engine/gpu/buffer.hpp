@@ -22,6 +22,10 @@ struct BufferRange {
   std::uint64_t size = 0;    // bytes
 };
 
+// Throws InternalError naming `what` when `range` holds fewer than `bytes` bytes: wrappers call it
+// so that a kernel never indexes past the range it was given.
+void require_bytes(const BufferRange& range, std::uint64_t bytes, const std::string& what);
+
 class RawBuffer {
  public:
   // `name` appears in errors and in validation messages.

@@ -275,12 +275,8 @@ Context::Context(const ContextOptions& options) : impl_(std::make_unique<Impl>()
 
     vkGetPhysicalDeviceMemoryProperties(m.physical, &m.memory_properties);
     const auto host = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
-    m.device_memory_type = find_memory_type(m.memory_properties, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-    m.staging_memory_type = find_memory_type(m.memory_properties, host);
-    if (m.tuning.mapped_device_buffers)
-      m.mapped_memory_type = find_memory_type(m.memory_properties, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT | host);
-    if (m.device_memory_type == ~0u) m.device_memory_type = find_memory_type(m.memory_properties, 0);
-    if (m.staging_memory_type == ~0u) throw DeviceError("device '" + m.info.name + "' has no host-visible memory");
+    if (find_memory_type(m.memory_properties, host) == ~0u)
+      throw DeviceError("device '" + m.info.name + "' has no host-visible coherent memory");
 
     m.dummy = std::make_unique<RawBuffer>(*this, 256, "unused binding");
   } catch (...) {

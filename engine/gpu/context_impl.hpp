@@ -52,10 +52,7 @@ struct Context::Impl {
   PFN_vkCmdPushDescriptorSetKHR push_descriptor = nullptr;
   PFN_vkSetDebugUtilsObjectNameEXT set_object_name = nullptr;
 
-  VkPhysicalDeviceMemoryProperties memory_properties{};
-  std::uint32_t device_memory_type = ~0u;   // device-local
-  std::uint32_t mapped_memory_type = ~0u;   // device-local and host-visible/coherent, if tuning allows
-  std::uint32_t staging_memory_type = ~0u;  // host-visible/coherent
+  VkPhysicalDeviceMemoryProperties memory_properties{};  // memory types are picked per buffer
 
   DeviceInfo info;
   DeviceTuning tuning;

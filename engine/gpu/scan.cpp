@@ -10,7 +10,7 @@ struct BlockSumsPush {
   std::uint32_t n;
 };
 struct ScanBlocksPush {
-  std::uint32_t n, has_block_offsets, has_carry;
+  std::uint32_t n, has_block_offsets, has_carry, has_total;
 };
 
 struct ScanKernels {
@@ -39,17 +39,17 @@ void scan_range(Stream& stream, bool flags, BufferRange input, BufferRange outpu
   if (n == 0) return;
   const ScanKernels k = kernels(stream.context(), flags);
   const std::uint64_t blocks = (n + k.block_elements - 1) / k.block_elements;
-  const std::uint32_t has_carry = carry.size ? 1u : 0u;
+  const std::uint32_t has_carry = carry.size ? 1u : 0u, has_total = total.size ? 1u : 0u;
   if (blocks == 1) {
     stream.dispatch_groups(k.blocks, {input, output, BufferRange{input.buffer, 0, 0}, carry, total},
-                           ScanBlocksPush{std::uint32_t(n), 0u, has_carry}, Elements(1));
+                           ScanBlocksPush{std::uint32_t(n), 0u, has_carry, has_total}, Elements(1));
     return;
   }
   const BufferRange sums = stream.scratch(blocks * 4, "scan block sums");
   const Elements groups_of_blocks(blocks * k.block_sums.local_size()[0]);  // one workgroup per block
   stream.dispatch(k.block_sums, {input, sums}, BlockSumsPush{std::uint32_t(n)}, groups_of_blocks);
   scan_range(stream, false, sums, sums, {}, {});  // block sums -> block offsets, in place
-  stream.dispatch(k.blocks, {input, output, sums, carry, total}, ScanBlocksPush{std::uint32_t(n), 1u, has_carry},
+  stream.dispatch(k.blocks, {input, output, sums, carry, total}, ScanBlocksPush{std::uint32_t(n), 1u, has_carry, has_total},
                   groups_of_blocks);
 }
 

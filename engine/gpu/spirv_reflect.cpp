@@ -38,7 +38,8 @@ KernelLayout reflect_spirv(std::span<const std::uint32_t> words, const std::stri
   std::unordered_map<std::uint32_t, std::uint32_t> constants;       // id -> 32-bit value
   std::unordered_map<std::uint32_t, std::uint32_t> spec_ids;        // id -> SpecId
   std::unordered_map<std::uint32_t, std::uint32_t> bindings, sets;  // variable id -> value
-  std::unordered_map<std::uint32_t, bool> non_writable, non_readable;
+  std::unordered_map<std::uint32_t, bool> non_writable, non_readable;  // variables
+  std::unordered_map<std::uint32_t, std::uint32_t> members_non_writable, members_non_readable;  // per struct
   std::unordered_map<std::uint64_t, std::uint32_t> member_offset;   // (struct << 32 | member) -> offset
   std::unordered_map<std::uint32_t, std::uint32_t> array_stride;
   std::unordered_map<std::uint64_t, std::uint32_t> matrix_stride;
@@ -93,8 +94,8 @@ KernelLayout reflect_spirv(std::span<const std::uint32_t> words, const std::stri
       case OpMemberDecorate:
         if (w[3] == DecOffset) member_offset[(std::uint64_t(w[1]) << 32) | w[2]] = w[4];
         else if (w[3] == DecMatrixStride) matrix_stride[(std::uint64_t(w[1]) << 32) | w[2]] = w[4];
-        else if (w[3] == DecNonWritable) non_writable[w[1]] = true;
-        else if (w[3] == DecNonReadable) non_readable[w[1]] = true;
+        else if (w[3] == DecNonWritable) ++members_non_writable[w[1]];
+        else if (w[3] == DecNonReadable) ++members_non_readable[w[1]];
         break;
       default:
         break;
@@ -149,11 +150,13 @@ KernelLayout reflect_spirv(std::span<const std::uint32_t> words, const std::stri
     } else if (v.storage == StorageStorageBuffer || v.storage == StorageUniform) {
       if (!bindings.count(v.id)) continue;
       if (sets[v.id] != 0) throw InternalError("shader '" + name + "': only descriptor set 0 is supported");
-      // Access qualifiers sit on the variable or on every member of the block type.
-      // SPIR-V 1.3+ (Vulkan 1.1+) puts storage buffers in StorageBuffer, uniform buffers in Uniform.
+      // Access qualifiers sit on the variable, or on members of the block type: the block is
+      // read-only (write-only) only when every member is. SPIR-V 1.3+ (Vulkan 1.1+) puts storage
+      // buffers in StorageBuffer and uniform buffers in Uniform.
+      const auto members = types.count(pointee) ? std::uint32_t(types[pointee].operands.size()) : 0u;
       const bool uniform = v.storage == StorageUniform;
-      const bool ro = uniform || non_writable[v.id] || non_writable[pointee];
-      const bool wo = !uniform && (non_readable[v.id] || non_readable[pointee]);
+      const bool ro = uniform || non_writable[v.id] || (members && members_non_writable[pointee] == members);
+      const bool wo = !uniform && (non_readable[v.id] || (members && members_non_readable[pointee] == members));
       layout.bindings.push_back({bindings[v.id], uniform, !wo, !ro});
     }
   }

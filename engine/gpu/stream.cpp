@@ -19,6 +19,14 @@ struct Access {
   bool write;
 };
 
+// A range must lie inside its buffer, or its descriptor would reach past the allocation.
+void check_inside(const BufferRange& r, const std::string& what) {
+  if (r.size && r.buffer && r.offset + r.size > r.buffer->bytes())
+    throw InternalError(what + ": range [" + std::to_string(r.offset) + ", " + std::to_string(r.offset + r.size) +
+                        ") lies outside buffer '" + r.buffer->name() + "' of " + std::to_string(r.buffer->bytes()) +
+                        " bytes");
+}
+
 struct OpenPass {
   std::string name;
   std::uint32_t begin_query;
@@ -43,6 +51,8 @@ struct Stream::Impl {
   std::uint32_t sets_in_current_pool = kSetsPerPool;
   std::vector<std::unique_ptr<RawBuffer>> scratch;
   std::uint32_t dispatches = 0;
+  bool in_flight = false;  // submitted and not yet known complete
+  bool recording = false;
 
   explicit Impl(Context::Impl& impl) : m(impl) {}
 
@@ -50,6 +60,7 @@ struct Stream::Impl {
     VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     NF_VK_CHECK(vkBeginCommandBuffer(cmd, &begin));
+    recording = true;
     if (queries) vkCmdResetQueryPool(cmd, queries, 0, kMaxTimestamps);
     queries_used = 0;
     passes.clear();
@@ -61,8 +72,10 @@ struct Stream::Impl {
   void full_barrier() {
     VkMemoryBarrier b{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
     b.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
-    b.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_READ_BIT |
-                      VK_ACCESS_TRANSFER_WRITE_BIT;
+    // Uniform-buffer reads are not covered by SHADER_READ: name them, or constant caches may
+    // serve stale data after a storage write (e.g. transposed weights read as a uniform buffer).
+    b.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_UNIFORM_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT |
+                      VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
     const VkPipelineStageFlags stages = VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT;
     vkCmdPipelineBarrier(cmd, stages, stages, 0, 1, &b, 0, nullptr, 0, nullptr);
     pending.clear();
@@ -124,7 +137,12 @@ Stream::Stream(Context& context) : context_(&context), impl_(std::make_unique<Im
 Stream::~Stream() {
   Impl& s = *impl_;
   Context::Impl& m = s.m;
-  vkEndCommandBuffer(s.cmd);
+  if (s.in_flight && vkWaitForFences(m.device, 1, &s.fence, VK_TRUE, kWaitTimeoutNs) != VK_SUCCESS) {
+    // The GPU may still use these objects (hung or lost device): leak them rather than free them.
+    for (auto& b : s.scratch) (void)b.release();
+    return;
+  }
+  if (s.recording) vkEndCommandBuffer(s.cmd);
   for (auto pool : s.pools) vkDestroyDescriptorPool(m.device, pool, nullptr);
   if (s.queries) vkDestroyQueryPool(m.device, s.queries, nullptr);
   vkDestroyFence(m.device, s.fence, nullptr);
@@ -178,6 +196,7 @@ void Stream::record_dispatch(const Kernel& kernel, const BufferRange* bindings, 
       continue;
     }
     if (!r.buffer) throw InternalError("kernel '" + kernel.name() + "': binding " + std::to_string(b) + " is null");
+    check_inside(r, "kernel '" + kernel.name() + "' binding " + std::to_string(b));
     const bool uniform = layout.bindings[b].uniform;
     const std::uint64_t max_range = uniform ? lim.max_uniform_buffer_range : lim.max_storage_buffer_range;
     const std::uint64_t alignment =
@@ -232,6 +251,8 @@ void Stream::copy(BufferRange source, BufferRange destination) {
     throw InternalError("copy from '" + source.buffer->name() + "' to '" + destination.buffer->name() +
                         "': sizes differ (" + std::to_string(source.size) + " vs " + std::to_string(destination.size) + ")");
   if (source.size == 0) return;
+  check_inside(source, "copy source");
+  check_inside(destination, "copy destination");
   s.track({{source.buffer->handles().buffer, source.offset, source.offset + source.size, false},
            {destination.buffer->handles().buffer, destination.offset, destination.offset + destination.size, true}});
   VkBufferCopy region{source.offset, destination.offset, source.size};
@@ -243,6 +264,7 @@ void Stream::fill(BufferRange range, std::uint32_t value) {
   if (range.size == 0) return;
   if (range.offset % 4 || range.size % 4)
     throw InternalError("fill of '" + range.buffer->name() + "': offset and size must be multiples of 4 bytes");
+  check_inside(range, "fill");
   s.track({{range.buffer->handles().buffer, range.offset, range.offset + range.size, true}});
   vkCmdFillBuffer(s.cmd, range.buffer->handles().buffer, range.offset, range.size, value);
 }
@@ -293,6 +315,7 @@ void Stream::submit_and_wait() {
   to_host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
   vkCmdPipelineBarrier(s.cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
                        VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &to_host, 0, nullptr, 0, nullptr);
+  s.recording = false;
   NF_VK_CHECK(vkEndCommandBuffer(s.cmd));
   VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
   submit.commandBufferCount = 1;
@@ -301,9 +324,11 @@ void Stream::submit_and_wait() {
     std::lock_guard lock(m.queue_mutex);
     NF_VK_CHECK(vkQueueSubmit(m.queue, 1, &submit, s.fence));
   }
+  s.in_flight = true;
   const VkResult waited = vkWaitForFences(m.device, 1, &s.fence, VK_TRUE, kWaitTimeoutNs);
   if (waited == VK_TIMEOUT) throw DeviceError("GPU work did not finish within 600 s (hung kernel or lost device)");
   NF_VK_CHECK(waited);
+  s.in_flight = false;
 
   s.last_times.clear();
   if (s.queries_used > 0) {

@@ -16,14 +16,14 @@ struct StatsPush {
 };
 struct PreparePush {
   std::uint32_t groups;
-  float max_norm;
+  float max_norm, beta1, beta2;
 };
 struct StepPush {
   std::uint32_t offset, count;
   float lr, weight_decay, beta1, beta2, eps;
 };
 constexpr std::uint32_t kStatsGroups = 256;
-constexpr std::uint32_t kStateWords = 5;  // taken, skipped, skip, clip, norm
+constexpr std::uint32_t kStateWords = 7;  // taken, skipped, skip, clip, norm, beta1^t, beta2^t
 
 }  // namespace
 
@@ -54,7 +54,8 @@ Adam::Adam(gpu::Context& context, std::uint64_t parameter_count, const AdamConfi
 void Adam::reset() {
   m_->fill_u32(0);
   v_->fill_u32(0);
-  state_->fill_u32(0);
+  const std::uint32_t one = 0x3f800000u;  // 1.0f: beta^0
+  state_->upload(std::vector<std::uint32_t>{0, 0, 0, one, 0, one, one});
 }
 
 void Adam::step(gpu::Stream& stream, gpu::BufferRange parameters, gpu::BufferRange gradients, float lr) {
@@ -68,7 +69,7 @@ void Adam::step(gpu::Stream& stream, gpu::BufferRange parameters, gpu::BufferRan
   const gpu::BufferRange partials = stream.scratch(std::max(1u, groups) * 8, "gradient statistics");
   stream.dispatch_groups(stats, {gradients, partials}, StatsPush{std::uint32_t(count_), per_group},
                          gpu::Elements(std::max(1u, groups)));
-  stream.dispatch_groups(prepare, {partials, state_->whole()}, PreparePush{groups, config_.max_grad_norm},
+  stream.dispatch_groups(prepare, {partials, state_->whole()}, PreparePush{groups, config_.max_grad_norm, config_.beta1, config_.beta2},
                          gpu::Elements(1));
   for (const ParamGroup& g : groups_) {
     if (g.count == 0) continue;

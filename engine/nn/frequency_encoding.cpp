@@ -24,6 +24,8 @@ FrequencyEncoding::FrequencyEncoding(const FrequencyEncodingConfig& config) : co
 
 void FrequencyEncoding::forward(gpu::Stream& stream, gpu::BufferRange points, gpu::BufferRange encoded,
                                 std::uint32_t batch) const {
+  gpu::require_bytes(points, std::uint64_t(batch) * config_.dims * 4, "frequency encoding points");
+  gpu::require_bytes(encoded, std::uint64_t(batch) * config_.output_stride() * 4, "frequency encoding output");
   const gpu::Kernel& k = stream.context().kernel("nn/frequency_encoding_fwd", {{0, kWorkgroup}});
   const ForwardPush push{batch, config_.dims, config_.frequencies, config_.include_input ? 1u : 0u,
                          config_.output_dim(), config_.output_stride() / 4};
@@ -32,6 +34,9 @@ void FrequencyEncoding::forward(gpu::Stream& stream, gpu::BufferRange points, gp
 
 void FrequencyEncoding::backward(gpu::Stream& stream, gpu::BufferRange points, gpu::BufferRange grad_encoded,
                                  gpu::BufferRange grad_points, std::uint32_t batch, bool accumulate) const {
+  gpu::require_bytes(points, std::uint64_t(batch) * config_.dims * 4, "frequency encoding points");
+  gpu::require_bytes(grad_encoded, std::uint64_t(batch) * config_.output_stride() * 4, "frequency encoding gradient");
+  gpu::require_bytes(grad_points, std::uint64_t(batch) * config_.dims * 4, "frequency encoding point gradient");
   const gpu::Kernel& k = stream.context().kernel("nn/frequency_encoding_bwd", {{0, kWorkgroup}});
   const BackwardPush push{batch, config_.dims, config_.frequencies, config_.include_input ? 1u : 0u,
                           config_.output_stride(), accumulate ? 1u : 0u};

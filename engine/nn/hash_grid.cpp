@@ -46,6 +46,9 @@ std::vector<float> HashGrid::initial_table(unsigned seed) const {
 
 void HashGrid::forward(gpu::Stream& stream, gpu::BufferRange points, gpu::BufferRange table, gpu::BufferRange encoded,
                        std::uint32_t batch) const {
+  gpu::require_bytes(points, std::uint64_t(batch) * 12, "hash grid points");
+  gpu::require_bytes(table, config_.parameter_count() * 4, "hash grid table");
+  gpu::require_bytes(encoded, std::uint64_t(batch) * config_.output_stride() * 4, "hash grid output");
   const gpu::Kernel& k = stream.context().kernel("nn/hash_grid_fwd", {{0, kWorkgroup}});
   stream.dispatch(k, {points, table, encoded}, make_push(config_, batch), gpu::Elements(batch));
 }
@@ -53,6 +56,11 @@ void HashGrid::forward(gpu::Stream& stream, gpu::BufferRange points, gpu::Buffer
 void HashGrid::backward(gpu::Stream& stream, gpu::BufferRange points, gpu::BufferRange table,
                         gpu::BufferRange grad_encoded, gpu::BufferRange grad_table, gpu::BufferRange grad_points,
                         std::uint32_t batch, bool accumulate_points) const {
+  gpu::require_bytes(points, std::uint64_t(batch) * 12, "hash grid points");
+  gpu::require_bytes(table, config_.parameter_count() * 4, "hash grid table");
+  gpu::require_bytes(grad_table, config_.parameter_count() * 4, "hash grid table gradient");
+  gpu::require_bytes(grad_encoded, std::uint64_t(batch) * config_.output_stride() * 4, "hash grid output gradient");
+  if (grad_points.size) gpu::require_bytes(grad_points, std::uint64_t(batch) * 12, "hash grid point gradient");
   const gpu::Kernel& k = stream.context().kernel("nn/hash_grid_bwd", {{0, kWorkgroup}});
   HashGridPush push = make_push(config_, batch);
   push.has_grad_points = grad_points.size ? 1u : 0u;

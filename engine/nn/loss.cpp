@@ -14,6 +14,10 @@ struct MsePush {
 
 void mse_loss(gpu::Stream& stream, gpu::BufferRange prediction, gpu::BufferRange target, gpu::BufferRange grad,
               gpu::BufferRange loss, std::uint32_t batch, std::uint32_t dims, std::uint32_t stride) {
+  gpu::require_bytes(prediction, std::uint64_t(batch) * stride * 4, "mse prediction");
+  gpu::require_bytes(grad, std::uint64_t(batch) * stride * 4, "mse gradient");
+  gpu::require_bytes(target, std::uint64_t(batch) * dims * 4, "mse target");
+  gpu::require_bytes(loss, 4, "mse loss");
   const std::uint32_t wg = gpu::primitive_workgroup(stream.context(), 256);
   const gpu::Kernel& k = stream.context().kernel("nn/loss_mse", {{0, wg}});
   const std::uint64_t count = std::uint64_t(batch) * stride;

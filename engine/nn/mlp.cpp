@@ -125,8 +125,7 @@ Mlp::Workspace::Workspace(const Mlp& mlp, std::uint32_t batch) : batch_(batch) {
 }
 
 void Mlp::forward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input) const {
-  if (input.size / 4 < std::uint64_t(input_stride()) * ws.batch_)
-    throw InternalError("mlp forward: input smaller than batch x input_stride");
+  gpu::require_bytes(input, std::uint64_t(input_stride()) * ws.batch_ * 4, "mlp forward input");
   gpu::BufferRange x = input;
   for (std::size_t li = 0; li < layers_.size(); ++li) {
     const gpu::BufferRange z = ws.z_[li] ? ws.z_[li]->whole() : gpu::BufferRange{};
@@ -139,6 +138,9 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
                    gpu::BufferRange grad_input, bool accumulate) {
   const std::uint32_t batch = ws.batch_;
   if (batch == 0) return;
+  gpu::require_bytes(input, std::uint64_t(batch) * input_stride() * 4, "mlp backward input");
+  gpu::require_bytes(grad_output, std::uint64_t(batch) * output_stride() * 4, "mlp output gradient");
+  if (grad_input.size) gpu::require_bytes(grad_input, std::uint64_t(batch) * input_stride() * 4, "mlp input gradient");
   const gpu::Kernel& act = context_.kernel("nn/mlp_activation_backward", {{0, 256}});
   const gpu::Kernel& transpose = context_.kernel("nn/mlp_transpose", {{0, 256}});
   const gpu::Kernel& weights = context_.kernel("nn/mlp_backward_weights", {{0, kWorkgroup}, {1, kSlabItems}});

@@ -52,6 +52,8 @@ void validate(const StrandShape& shape, const SegmentGaussianParams& params, std
 void segment_gaussian_forward(gpu::Stream& stream, const StrandShape& shape, const SegmentGaussianParams& params,
                               gpu::BufferRange points, gpu::BufferRange means, gpu::BufferRange covariances) {
   validate(shape, params, points.size / 4);
+  gpu::require_bytes(means, shape.segments() * 12, "segment means");
+  gpu::require_bytes(covariances, shape.segments() * 24, "segment covariances");
   gpu::Context& context = stream.context();
   const gpu::Kernel& kernel = context.kernel("splat/segment_gaussian_fwd", {{0, kWorkgroup}});
   const SegmentGaussianTerms<float> t(params);
@@ -70,6 +72,9 @@ void segment_gaussian_backward(gpu::Stream& stream, const StrandShape& shape, co
                                gpu::BufferRange points, gpu::BufferRange grad_means,
                                gpu::BufferRange grad_covariances, gpu::BufferRange grad_points, bool accumulate) {
   validate(shape, params, points.size / 4);
+  gpu::require_bytes(grad_means, shape.segments() * 12, "segment mean gradients");
+  gpu::require_bytes(grad_covariances, shape.segments() * 24, "segment covariance gradients");
+  gpu::require_bytes(grad_points, shape.points() * 12, "strand point gradients");
   gpu::Context& context = stream.context();
   const gpu::Kernel& kernel = context.kernel("splat/segment_gaussian_bwd", {{0, kWorkgroup}});
   const SegmentGaussianTerms<float> t(params);

@@ -25,6 +25,7 @@ layout(push_constant) uniform Push {
   uint n;
   uint has_block_offsets;
   uint has_carry;
+  uint has_total;
 } pc;
 
 shared uint tile[WG * ITEMS];
@@ -62,7 +63,7 @@ void main() {
     const uint i = base + k * WG + t;
     if (i < pc.n) result[i] = tile[k * WG + t];
   }
-  if (t == 0 && base + WG * ITEMS >= pc.n) {
+  if (pc.has_total != 0u && t == 0 && base + WG * ITEMS >= pc.n) {
     uint grand = block_total;
     if (pc.has_block_offsets != 0u) grand += block_offsets[block];
     if (pc.has_carry != 0u) grand += carry[0];

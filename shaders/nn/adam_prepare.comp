@@ -13,11 +13,15 @@ layout(std430, binding = 1) buffer State {
   uint skip;      // this step is skipped
   float clip;     // gradient scale of this step
   float norm;     // global gradient norm of this step (finite part)
+  float beta1_t;  // beta1^taken and beta2^taken, kept as running products: GLSL pow is too coarse
+  float beta2_t;  // for 1 - beta^t near beta = 0.999
 } state;
 
 layout(push_constant) uniform Push {
   uint groups;
   float max_norm;  // 0: no clipping
+  float beta1;
+  float beta2;
 } pc;
 
 void main() {
@@ -32,5 +36,7 @@ void main() {
   }
   state.skip = 0u;
   state.taken += 1u;
+  state.beta1_t *= pc.beta1;
+  state.beta2_t *= pc.beta2;
   state.clip = pc.max_norm > 0.0 && state.norm > pc.max_norm ? pc.max_norm / state.norm : 1.0;
 }

@@ -17,6 +17,8 @@ layout(std430, binding = 4) readonly buffer State {
   uint skip;
   float clip;
   float norm;
+  float beta1_t;
+  float beta2_t;
 } state;
 
 layout(push_constant) uniform Push {
@@ -38,8 +40,7 @@ void main() {
   const float vi = pc.beta2 * v[i] + (1.0 - pc.beta2) * g * g;
   m[i] = mi;
   v[i] = vi;
-  const float t = float(state.taken);
-  const float m_hat = mi / (1.0 - pow(pc.beta1, t));
-  const float v_hat = vi / (1.0 - pow(pc.beta2, t));
+  const float m_hat = mi / (1.0 - state.beta1_t);
+  const float v_hat = vi / (1.0 - state.beta2_t);
   params[i] -= pc.lr * (m_hat / (sqrt(v_hat) + pc.eps) + pc.weight_decay * params[i]);
 }

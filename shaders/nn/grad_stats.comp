@@ -25,7 +25,9 @@ void main() {
   float squares = 0.0, bad = 0.0;
   for (uint i = begin + gl_LocalInvocationID.x; i < end; i += WG) {
     const float g = grads[i];
-    if (isnan(g) || isinf(g)) bad += 1.0;
+    // Exponent all ones: NaN or Inf. A bit test, because without SignedZeroInfNanPreserve a compiler
+    // may assume isnan/isinf are false.
+    if ((floatBitsToUint(g) & 0x7f800000u) == 0x7f800000u) bad += 1.0;
     else squares += g * g;
   }
   const vec2 total = subgroupAdd(vec2(squares, bad));

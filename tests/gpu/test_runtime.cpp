@@ -108,6 +108,14 @@ TEST_CASE("dispatch asserts binding count, push-constant size and binding ranges
                        InternalError);
   CHECK_THROWS_WITH_AS(s.dispatch(k, {a, b}, WrongPush{16, 0}, Elements(16)),
                        doctest::Contains("declares 4 bytes of push constants"), InternalError);
+  // A range that reaches past its buffer (built without the checked range() helper).
+  const BufferRange past_end{&a, 64 * 4 - 16, 32};
+  CHECK_THROWS_WITH_AS(s.dispatch(k, {past_end, b}, CopyPush{1}, Elements(1)), doctest::Contains("lies outside"),
+                       InternalError);
+  CHECK_THROWS_WITH_AS(s.copy(past_end, b.range(0, 8)), doctest::Contains("lies outside"), InternalError);
+  CHECK_THROWS_WITH_AS(s.fill(past_end, 0), doctest::Contains("lies outside"), InternalError);
+  CHECK_THROWS_WITH_AS(require_bytes(a.range(0, 4), 32, "probe"), doctest::Contains("probe: range of 16 bytes"),
+                       InternalError);
   const std::uint64_t range = ctx.info().limits.max_storage_buffer_range;
   if (range + 64 <= ctx.info().limits.max_allocation_size) {
     RawBuffer big(ctx, range + 64, "bigger than a binding");
