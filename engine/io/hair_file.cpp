@@ -1,0 +1,110 @@
+// Cem Yuksel's .hair format (cemyuksel.com/research/hairmodels): a 128-byte header, then the
+// arrays its bit field announces, in order: segments (uint16 per strand), points, thickness,
+// transparency, colours (float32).
+#include <cstring>
+
+#include "engine/core/atomic_file.hpp"
+#include "engine/io/binary_io.hpp"
+#include "engine/io/strand_files.hpp"
+
+namespace nf::io {
+namespace {
+
+constexpr std::uint32_t kSegments = 1, kPoints = 2, kThickness = 4, kTransparency = 8, kColors = 16;
+
+#pragma pack(push, 1)
+struct HairHeader {
+  char signature[4];
+  std::uint32_t hair_count;
+  std::uint32_t point_count;
+  std::uint32_t arrays;
+  std::uint32_t default_segments;
+  float default_thickness;
+  float default_transparency;
+  float default_color[3];
+  char info[88];
+};
+#pragma pack(pop)
+static_assert(sizeof(HairHeader) == 128);
+
+}  // namespace
+
+void write_hair(const std::filesystem::path& path, const StrandSet& s) {
+  s.validate(path.string());
+  HairHeader h{};
+  std::memcpy(h.signature, "HAIR", 4);
+  h.hair_count = s.strand_count();
+  h.point_count = std::uint32_t(s.point_count());
+  h.arrays = kSegments | kPoints | (s.thickness.empty() ? 0u : kThickness) |
+             (s.transparency.empty() ? 0u : kTransparency) | (s.colors.empty() ? 0u : kColors);
+  h.default_segments = 0;
+  h.default_thickness = 1.f;
+  h.default_transparency = 0.f;
+  h.default_color[0] = h.default_color[1] = h.default_color[2] = 1.f;
+  std::strncpy(h.info, "nf_gpu strands", sizeof h.info - 1);
+  std::vector<std::uint16_t> segments(s.strand_count());
+  for (std::uint32_t i = 0; i < s.strand_count(); ++i) {
+    const std::uint32_t n = s.points_in(i);
+    if (n < 1 || n > 65536)
+      throw InputError(path.string() + ": strand " + std::to_string(i) + " has " + std::to_string(n) +
+                       " points; .hair stores 1..65536 per strand");
+    segments[i] = std::uint16_t(n - 1);
+  }
+  write_file_atomic(path, [&](std::ostream& out) {
+    out.write(reinterpret_cast<const char*>(&h), sizeof h);
+    write_array(out, segments);
+    write_array(out, s.points);
+    write_array(out, s.thickness);
+    write_array(out, s.transparency);
+    write_array(out, s.colors);
+  });
+}
+
+StrandSet read_hair(const std::filesystem::path& path) {
+  const std::string where = path.string();
+  const std::vector<char> bytes = read_file_bytes(path);
+  ByteReader in(bytes, where);
+  HairHeader h;
+  in.read(&h, 1, "header");
+  if (std::memcmp(h.signature, "HAIR", 4) != 0) throw InputError(where + ": not a .hair file (signature 'HAIR' missing)");
+  if (!(h.arrays & kPoints)) throw InputError(where + ": header says the file has no points array");
+  if (!(h.arrays & kSegments) && h.default_segments + 1ull > 65536)
+    throw InputError(where + ": default segment count " + std::to_string(h.default_segments) + " is invalid");
+  // Before allocating anything: do the counts fit in the file at all?
+  const std::uint64_t per_point = 12 + ((h.arrays & kThickness) ? 4 : 0) + ((h.arrays & kTransparency) ? 4 : 0) +
+                                  ((h.arrays & kColors) ? 12 : 0);
+  const std::uint64_t need = ((h.arrays & kSegments) ? 2ull * h.hair_count : 0) + per_point * h.point_count;
+  if (need > in.remaining())
+    throw InputError(where + ": header counts (" + std::to_string(h.hair_count) + " strands, " +
+                     std::to_string(h.point_count) + " points) need " + std::to_string(need) + " bytes but " +
+                     std::to_string(in.remaining()) + " follow the header (truncated, or a count is wrong)");
+  if (h.point_count && !h.hair_count) throw InputError(where + ": points but no strands");
+  StrandSet s;
+  s.offsets.resize(std::size_t(h.hair_count) + 1, 0);
+  std::vector<std::uint16_t> segments(h.hair_count, std::uint16_t(h.default_segments));
+  if (h.arrays & kSegments) in.read(segments.data(), segments.size(), "segments array");
+  for (std::uint32_t i = 0; i < h.hair_count; ++i) s.offsets[i + 1] = s.offsets[i] + segments[i] + 1u;
+  if (s.offsets.back() != h.point_count)
+    throw InputError(where + ": strands hold " + std::to_string(s.offsets.back()) + " points but the header says " +
+                     std::to_string(h.point_count));
+  s.points.resize(std::size_t(h.point_count) * 3);
+  in.read(s.points.data(), s.points.size(), "points array");
+  if (h.arrays & kThickness) {
+    s.thickness.resize(h.point_count);
+    in.read(s.thickness.data(), s.thickness.size(), "thickness array");
+  }
+  if (h.arrays & kTransparency) {
+    s.transparency.resize(h.point_count);
+    in.read(s.transparency.data(), s.transparency.size(), "transparency array");
+  }
+  if (h.arrays & kColors) {
+    s.colors.resize(std::size_t(h.point_count) * 3);
+    in.read(s.colors.data(), s.colors.size(), "color array");
+  }
+  if (in.remaining())
+    throw InputError(where + ": " + std::to_string(in.remaining()) + " bytes follow the last array (counts disagree)");
+  s.validate(where);
+  return s;
+}
+
+}  // namespace nf::io

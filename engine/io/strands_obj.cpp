@@ -1,0 +1,78 @@
+// Strands as Wavefront OBJ: `v x y z` lines, then one `l i j k ...` polyline per strand (1-based).
+#include <charconv>
+#include <fstream>
+#include <sstream>
+
+#include "engine/core/atomic_file.hpp"
+#include "engine/core/error.hpp"
+#include "engine/io/strand_files.hpp"
+
+namespace nf::io {
+namespace {
+
+void put_float(std::ostream& out, float v) {
+  char buffer[32];
+  const auto r = std::to_chars(buffer, buffer + sizeof buffer, v);
+  out.write(buffer, r.ptr - buffer);
+}
+
+}  // namespace
+
+void write_strands_obj(const std::filesystem::path& path, const StrandSet& s) {
+  s.validate(path.string());
+  write_file_atomic(path, [&](std::ostream& out) {
+    out << "# nf_gpu strands: " << s.strand_count() << " polylines, " << s.point_count() << " points\n";
+    for (std::uint64_t p = 0; p < s.point_count(); ++p) {
+      out << "v ";
+      put_float(out, s.points[3 * p]);
+      out << ' ';
+      put_float(out, s.points[3 * p + 1]);
+      out << ' ';
+      put_float(out, s.points[3 * p + 2]);
+      out << '\n';
+    }
+    for (std::uint32_t i = 0; i < s.strand_count(); ++i) {
+      out << 'l';
+      for (std::uint32_t p = s.offsets[i]; p < s.offsets[i + 1]; ++p) out << ' ' << (p + 1);
+      out << '\n';
+    }
+  });
+}
+
+StrandSet read_strands_obj(const std::filesystem::path& path) {
+  const std::string where = path.string();
+  std::ifstream in(path);
+  if (!in) throw InputError(where + ": cannot open");
+  std::vector<float> vertices;
+  StrandSet s;
+  s.offsets.push_back(0);
+  std::string line;
+  std::uint64_t number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (line.rfind("v ", 0) == 0) {
+      std::istringstream words(line.substr(2));
+      float xyz[3];
+      if (!(words >> xyz[0] >> xyz[1] >> xyz[2]))
+        throw InputError(where + ": line " + std::to_string(number) + ": a vertex needs three numbers");
+      vertices.insert(vertices.end(), xyz, xyz + 3);
+    } else if (line.rfind("l ", 0) == 0) {
+      std::istringstream words(line.substr(2));
+      long long index;
+      while (words >> index) {
+        const long long n = std::int64_t(vertices.size() / 3);
+        if (index < 0) index = n + index + 1;  // OBJ negative indices count back from the last vertex
+        if (index < 1 || index > n)
+          throw InputError(where + ": line " + std::to_string(number) + ": vertex index " + std::to_string(index) +
+                           " is outside 1.." + std::to_string(n));
+        s.points.insert(s.points.end(), vertices.begin() + (index - 1) * 3, vertices.begin() + index * 3);
+      }
+      s.offsets.push_back(std::uint32_t(s.points.size() / 3));
+    }
+  }
+  if (s.offsets.size() == 1) s.offsets.clear();
+  s.validate(where);
+  return s;
+}
+
+}  // namespace nf::io

@@ -1,0 +1,136 @@
+// Strands as binary little-endian PLY: vertices, the chains as `edge` elements (vertex1, vertex2)
+// that Blender and most tools import, and a `strand` element (first, count, region) that keeps the
+// strands exact for nf_gpu and anyone who reads it.
+#include <charconv>
+#include <sstream>
+
+#include "engine/core/atomic_file.hpp"
+#include "engine/io/binary_io.hpp"
+#include "engine/io/strand_files.hpp"
+
+namespace nf::io {
+
+void write_strands_ply(const std::filesystem::path& path, const StrandSet& s) {
+  s.validate(path.string());
+  std::uint64_t edges = 0;
+  for (std::uint32_t i = 0; i < s.strand_count(); ++i) edges += s.points_in(i) ? s.points_in(i) - 1 : 0;
+  const bool thick = !s.thickness.empty();
+  std::ostringstream header;
+  header << "ply\nformat binary_little_endian 1.0\ncomment nf_gpu strands: polylines as vertex chains\n"
+         << "element vertex " << s.point_count() << "\nproperty float x\nproperty float y\nproperty float z\n"
+         << (thick ? "property float thickness\n" : "") << "element edge " << edges
+         << "\nproperty int vertex1\nproperty int vertex2\n"
+         << "element strand " << s.strand_count() << "\nproperty int first\nproperty int count\nproperty ushort region\n"
+         << "end_header\n";
+  write_file_atomic(path, [&](std::ostream& out) {
+    out << header.str();
+    if (!thick) {
+      write_array(out, s.points);
+    } else {
+      for (std::uint64_t p = 0; p < s.point_count(); ++p) {
+        out.write(reinterpret_cast<const char*>(&s.points[3 * p]), 12);
+        out.write(reinterpret_cast<const char*>(&s.thickness[p]), 4);
+      }
+    }
+    for (std::uint32_t i = 0; i < s.strand_count(); ++i)
+      for (std::uint32_t p = s.offsets[i]; p + 1 < s.offsets[i + 1]; ++p) {
+        const std::int32_t e[2] = {std::int32_t(p), std::int32_t(p + 1)};
+        out.write(reinterpret_cast<const char*>(e), 8);
+      }
+    for (std::uint32_t i = 0; i < s.strand_count(); ++i) {
+      const std::int32_t fc[2] = {std::int32_t(s.offsets[i]), std::int32_t(s.points_in(i))};
+      const std::uint16_t region = s.regions.empty() ? 0 : s.regions[i];
+      out.write(reinterpret_cast<const char*>(fc), 8);
+      out.write(reinterpret_cast<const char*>(&region), 2);
+    }
+  });
+}
+
+StrandSet read_strands_ply(const std::filesystem::path& path) {
+  const std::string where = path.string();
+  const std::vector<char> bytes = read_file_bytes(path);
+  const std::string text(bytes.begin(), bytes.begin() + std::ptrdiff_t(std::min<std::size_t>(bytes.size(), 4096)));
+  const std::size_t end = text.find("end_header\n");
+  if (text.rfind("ply\n", 0) != 0 || end == std::string::npos) throw InputError(where + ": not a PLY file");
+  if (text.find("format binary_little_endian 1.0") == std::string::npos)
+    throw InputError(where + ": only binary little-endian strand PLY files are read (format line)");
+  // Element counts and the vertex layout, from the header lines.
+  std::istringstream lines(text.substr(0, end));
+  std::string line, current;
+  std::uint64_t vertices = 0, edges = 0, strands = 0;
+  bool thick = false, has_strand_element = false;
+  while (std::getline(lines, line)) {
+    std::istringstream words(line);
+    std::string word;
+    words >> word;
+    if (word == "element") {
+      std::uint64_t count = 0;
+      words >> current >> count;
+      if (!words) throw InputError(where + ": bad element line '" + line + "'");
+      if (current == "vertex") vertices = count;
+      else if (current == "edge") edges = count;
+      else if (current == "strand") strands = count, has_strand_element = true;
+      else throw InputError(where + ": unexpected element '" + current + "'");
+    } else if (word == "property" && current == "vertex") {
+      std::string type, name;
+      words >> type >> name;
+      if (type != "float") throw InputError(where + ": vertex property '" + name + "' must be float");
+      if (name == "thickness") thick = true;
+      else if (name != "x" && name != "y" && name != "z") throw InputError(where + ": unexpected vertex property '" + name + "'");
+    }
+  }
+  ByteReader in(bytes, where);
+  in.seek(end + std::string("end_header\n").size());
+  const std::uint64_t stride = thick ? 4 : 3;
+  if (vertices > in.remaining() / (4 * stride)) throw InputError(where + ": vertex count " + std::to_string(vertices) + " exceeds the file (truncated?)");
+  std::vector<float> raw(vertices * stride);
+  in.read(raw.data(), raw.size(), "vertex data");
+  StrandSet s;
+  s.points.resize(vertices * 3);
+  if (thick) s.thickness.resize(vertices);
+  for (std::uint64_t v = 0; v < vertices; ++v) {
+    for (int a = 0; a < 3; ++a) s.points[3 * v + a] = raw[stride * v + a];
+    if (thick) s.thickness[v] = raw[stride * v + 3];
+  }
+  if (edges > in.remaining() / 8) throw InputError(where + ": edge count " + std::to_string(edges) + " exceeds the file (truncated?)");
+  std::vector<std::int32_t> e(edges * 2);
+  in.read(e.data(), e.size(), "edge data");
+  if (has_strand_element) {
+    s.offsets.push_back(0);
+    for (std::uint64_t i = 0; i < strands; ++i) {
+      const auto first = in.value<std::int32_t>("strand " + std::to_string(i) + " first");
+      const auto count = in.value<std::int32_t>("strand " + std::to_string(i) + " count");
+      const auto region = in.value<std::uint16_t>("strand " + std::to_string(i) + " region");
+      if (first != std::int32_t(s.offsets.back()) || count < 0)
+        throw InputError(where + ": strand " + std::to_string(i) + " (first " + std::to_string(first) + ", count " +
+                         std::to_string(count) + ") does not follow the previous strand");
+      s.offsets.push_back(std::uint32_t(first + count));
+      s.regions.push_back(region);
+    }
+  } else {
+    // Plain vertex chains (files from other tools): consecutive edges (v, v+1) continue a strand,
+    // and a strand starts right after the previous one ends.
+    s.offsets.push_back(0);
+    std::int64_t chain_end = -1;
+    for (std::uint64_t i = 0; i < edges; ++i) {
+      const std::int64_t a = e[2 * i], b = e[2 * i + 1];
+      if (b != a + 1 || a < 0 || std::uint64_t(b) >= vertices)
+        throw InputError(where + ": edge " + std::to_string(i) + " (" + std::to_string(a) + ", " + std::to_string(b) +
+                         ") is not a step along a vertex chain");
+      if (a != chain_end) {  // a new chain
+        if (a != chain_end + 1) throw InputError(where + ": vertices before edge " + std::to_string(i) + " belong to no chain");
+        if (chain_end >= 0) s.offsets.push_back(std::uint32_t(a));
+      }
+      chain_end = b;
+    }
+    if (vertices && std::uint64_t(chain_end + 1) != vertices)
+      throw InputError(where + ": the last vertices belong to no chain");
+    if (vertices) s.offsets.push_back(std::uint32_t(vertices));
+    else s.offsets.clear();
+  }
+  if (in.remaining()) throw InputError(where + ": " + std::to_string(in.remaining()) + " bytes follow the last element");
+  s.validate(where);
+  return s;
+}
+
+}  // namespace nf::io
