@@ -10,6 +10,8 @@
 #include "engine/core/log.hpp"
 #include "engine/gpu/context.hpp"
 #include "engine/gradcheck/catalog.hpp"
+#include "engine/io/strand_files.hpp"
+#include "engine/metrics/strand_metrics.hpp"
 
 namespace {
 
@@ -81,6 +83,40 @@ int run_gradcheck(const std::string& only, bool as_json) {
   return ok ? 0 : int(nf::ExitCode::DeviceOrInternal);
 }
 
+struct MetricsOptions {
+  std::string pred, gt;
+  double scale = 1.0;
+  std::uint32_t strands = 100000, points = 100;
+  unsigned seed = 1;
+  bool json_out = false;
+};
+
+int run_metrics(const MetricsOptions& o) {
+  const auto pred = nf::metrics::sample_strands(nf::io::read_strands(o.pred), o.strands, o.points, o.seed);
+  nf::json out{{"pred", o.pred}, {"strands", pred.strands}, {"points_per_strand", pred.points},
+               {"cm_per_unit", o.scale}, {"consistency", nf::metrics::to_json(nf::metrics::consistency_metrics(pred, o.scale))}};
+  if (!o.gt.empty()) {
+    const auto gt = nf::metrics::sample_strands(nf::io::read_strands(o.gt), o.strands, o.points, o.seed + 1);
+    out["gt"] = o.gt;
+    out["match"] = nf::metrics::to_json(nf::metrics::match_scores(pred, gt, nf::metrics::default_thresholds(), o.scale));
+  }
+  if (o.json_out) {
+    std::cout << out.dump(2) << "\n";
+    return 0;
+  }
+  std::cout << "strands: " << pred.strands << " sampled from " << o.pred << " (" << pred.points << " points each, "
+            << o.scale << " cm per unit)\n";
+  for (const auto& [key, value] : out["consistency"].items()) std::printf("  %-28s %12.6g\n", key.c_str(), value.get<double>());
+  if (out.contains("match")) {
+    std::cout << "against " << o.gt << ":\n  distance  angle  directed  precision  recall  F-score\n";
+    for (const auto& m : out["match"])
+      std::printf("  %5.1f cm %5.0f°  %-8s  %9.2f  %6.2f  %7.2f\n", m["distance_cm"].get<double>(),
+                  m["angle_deg"].get<double>(), m["directed"].get<bool>() ? "yes" : "no", m["precision"].get<double>(),
+                  m["recall"].get<double>(), m["fscore"].get<double>());
+  }
+  return 0;
+}
+
 int run_bench(const nf::bench::Options& options, const std::string& json_path, bool profile) {
   nf::gpu::Context context;
   const json records = nf::bench::run_suite(context, options);
@@ -118,6 +154,16 @@ int main(int argc, char** argv) {
   bench->add_option("--torch-peer", bench_options.torch_peer,
                     "tools/bench_torch_nn.py: time PyTorch on the CPU as a peer (suite nn)");
 
+  MetricsOptions metrics_options;
+  auto* metrics = app.add_subcommand("metrics", "strand metrics (paper supplementary): consistency, and P/R/F against ground truth");
+  metrics->add_option("--pred", metrics_options.pred, "predicted strands (.hair, .ply, .obj, .usda)")->required()->check(CLI::ExistingFile);
+  metrics->add_option("--gt", metrics_options.gt, "ground-truth strands")->check(CLI::ExistingFile);
+  metrics->add_option("--scale", metrics_options.scale, "cm per scene unit (default 1)")->check(CLI::PositiveNumber);
+  metrics->add_option("--strands", metrics_options.strands, "strands sampled from each side (default 100000)");
+  metrics->add_option("--points", metrics_options.points, "points per resampled strand (default 100)");
+  metrics->add_option("--seed", metrics_options.seed, "sampling seed");
+  metrics->add_flag("--json", metrics_options.json_out, "machine-readable output");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -129,6 +175,7 @@ int main(int argc, char** argv) {
     if (*info) return run_info(info_json);
     if (*gradcheck) return run_gradcheck(kernel_name, gradcheck_json);
     if (*bench) return run_bench(bench_options, bench_json, profile);
+    if (*metrics) return run_metrics(metrics_options);
   } catch (const nf::Error& e) {
     std::cerr << "nf_gpu: error: " << e.what() << "\n";
     return int(e.code());

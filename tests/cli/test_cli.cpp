@@ -10,6 +10,7 @@
 #include <string>
 
 #include "engine/core/json.hpp"
+#include "engine/io/strand_files.hpp"
 
 namespace {
 
@@ -92,6 +93,28 @@ TEST_CASE("without any Vulkan driver the error says which Debian package to inst
   const Result r = run("info", "VK_ICD_FILENAMES=/nonexistent.json VK_DRIVER_FILES=/nonexistent.json NF_VALIDATION=0");
   CHECK(r.code == 3);
   CHECK(r.output.find("mesa-vulkan-drivers") != std::string::npos);
+}
+
+TEST_CASE("nf_gpu metrics scores strand files and names bad input") {
+  const auto dir = std::filesystem::temp_directory_path();
+  std::vector<float> xyz;
+  for (int i = 0; i < 30; ++i)
+    for (int p = 0; p < 10; ++p) xyz.insert(xyz.end(), {float(i), 0.1f * p, 0.f});
+  nf::io::write_hair(dir / "nf_cli_a.hair", nf::io::StrandSet::uniform(30, 10, xyz));
+  const Result r = run("metrics --pred " + (dir / "nf_cli_a.hair").string() + " --gt " + (dir / "nf_cli_a.hair").string() +
+                       " --scale 2 --json");
+  REQUIRE(r.code == 0);
+  const nf::json m = nf::json::parse(r.output);
+  CHECK(m["strands"] == 30);
+  CHECK(m["consistency"]["length_mean_cm"].get<double>() == doctest::Approx(1.8));
+  for (const auto& score : m["match"]) CHECK(score["fscore"].get<double>() == doctest::Approx(100));
+  std::ofstream(dir / "nf_cli_bad.hair") << "HAIR but truncated";
+  const Result bad = run("metrics --pred " + (dir / "nf_cli_bad.hair").string());
+  CHECK(bad.code == 1);
+  CHECK(bad.output.find("nf_cli_bad.hair") != std::string::npos);
+  CHECK(run("metrics --pred /nonexistent.hair").code == 2);
+  std::filesystem::remove(dir / "nf_cli_a.hair");
+  std::filesystem::remove(dir / "nf_cli_bad.hair");
 }
 
 TEST_CASE("usage errors exit with 2") {
