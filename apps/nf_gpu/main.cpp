@@ -11,7 +11,9 @@
 #include "engine/gpu/context.hpp"
 #include "engine/gradcheck/catalog.hpp"
 #include "engine/io/strand_files.hpp"
+#include "engine/io/mesh.hpp"
 #include "engine/metrics/strand_metrics.hpp"
+#include "engine/metrics/surface_metrics.hpp"
 
 namespace {
 
@@ -84,14 +86,36 @@ int run_gradcheck(const std::string& only, bool as_json) {
 }
 
 struct MetricsOptions {
-  std::string pred, gt;
+  std::string pred, gt, outer, mesh, reference;
+  double fscore_mm = 5.0;
   double scale = 1.0;
   std::uint32_t strands = 100000, points = 100;
   unsigned seed = 1;
   bool json_out = false;
 };
 
+int run_surface_metrics(const MetricsOptions& o) {
+  const auto m = nf::metrics::surface_metrics(nf::io::read_mesh(o.mesh), nf::io::read_mesh(o.reference), o.scale, o.fscore_mm);
+  const nf::json out{{"mesh", o.mesh}, {"reference", o.reference}, {"cm_per_unit", o.scale}, {"surface", nf::metrics::to_json(m)}};
+  if (o.json_out) {
+    std::cout << out.dump(2) << "\n";
+    return 0;
+  }
+  std::printf("%s against %s (%llu samples each, %g cm per unit)\n", o.mesh.c_str(), o.reference.c_str(),
+              (unsigned long long)m.samples, o.scale);
+  std::printf("  chamfer mm          mean %.4g  min %.4g  max %.4g\n", m.chamfer_mean_mm, m.chamfer_min_mm, m.chamfer_max_mm);
+  std::printf("  accuracy mm         %.4g\n  completeness mm     %.4g\n", m.accuracy_mm, m.completeness_mm);
+  std::printf("  normal consistency  %.4f\n", m.normal_consistency);
+  std::printf("  F-score at %g mm    precision %.2f  recall %.2f  F %.2f\n", m.fscore_threshold_mm, m.precision, m.recall, m.fscore);
+  return 0;
+}
+
 int run_metrics(const MetricsOptions& o) {
+  if (!o.mesh.empty() || !o.reference.empty()) {
+    if (o.mesh.empty() || o.reference.empty()) throw nf::UsageError("surface metrics need both --mesh and --ref");
+    return run_surface_metrics(o);
+  }
+  if (o.pred.empty()) throw nf::UsageError("metrics need --pred (strands) or --mesh and --ref (surfaces)");
   const auto pred = nf::metrics::sample_strands(nf::io::read_strands(o.pred), o.strands, o.points, o.seed);
   nf::json out{{"pred", o.pred}, {"strands", pred.strands}, {"points_per_strand", pred.points},
                {"cm_per_unit", o.scale}, {"consistency", nf::metrics::to_json(nf::metrics::consistency_metrics(pred, o.scale))}};
@@ -100,6 +124,8 @@ int run_metrics(const MetricsOptions& o) {
     out["gt"] = o.gt;
     out["match"] = nf::metrics::to_json(nf::metrics::match_scores(pred, gt, nf::metrics::default_thresholds(), o.scale));
   }
+  if (!o.outer.empty())
+    out["tips_to_outer"] = nf::metrics::to_json(nf::metrics::tip_chamfer(pred, nf::io::read_mesh(o.outer), o.scale));
   if (o.json_out) {
     std::cout << out.dump(2) << "\n";
     return 0;
@@ -114,6 +140,9 @@ int run_metrics(const MetricsOptions& o) {
                   m["angle_deg"].get<double>(), m["directed"].get<bool>() ? "yes" : "no", m["precision"].get<double>(),
                   m["recall"].get<double>(), m["fscore"].get<double>());
   }
+  if (out.contains("tips_to_outer"))
+    std::printf("strand tips against %s: two-way chamfer %.4g mm\n", o.outer.c_str(),
+                out["tips_to_outer"]["two_way_mm"].get<double>());
   return 0;
 }
 
@@ -156,7 +185,11 @@ int main(int argc, char** argv) {
 
   MetricsOptions metrics_options;
   auto* metrics = app.add_subcommand("metrics", "strand metrics (paper supplementary): consistency, and P/R/F against ground truth");
-  metrics->add_option("--pred", metrics_options.pred, "predicted strands (.hair, .ply, .obj, .usda)")->required()->check(CLI::ExistingFile);
+  metrics->add_option("--pred", metrics_options.pred, "predicted strands (.hair, .ply, .obj, .usda)")->check(CLI::ExistingFile);
+  metrics->add_option("--outer", metrics_options.outer, "outer surface mesh: two-way chamfer with the strand tips")->check(CLI::ExistingFile);
+  metrics->add_option("--mesh", metrics_options.mesh, "surface metrics: this mesh (.ply, .obj)...")->check(CLI::ExistingFile);
+  metrics->add_option("--ref", metrics_options.reference, "...against this reference mesh")->check(CLI::ExistingFile);
+  metrics->add_option("--fscore-mm", metrics_options.fscore_mm, "surface F-score distance in mm (default 5)")->check(CLI::PositiveNumber);
   metrics->add_option("--gt", metrics_options.gt, "ground-truth strands")->check(CLI::ExistingFile);
   metrics->add_option("--scale", metrics_options.scale, "cm per scene unit (default 1)")->check(CLI::PositiveNumber);
   metrics->add_option("--strands", metrics_options.strands, "strands sampled from each side (default 100000)");

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "engine/core/json.hpp"
+#include "engine/io/mesh.hpp"
 #include "engine/io/strand_files.hpp"
 
 namespace {
@@ -115,6 +116,24 @@ TEST_CASE("nf_gpu metrics scores strand files and names bad input") {
   CHECK(run("metrics --pred /nonexistent.hair").code == 2);
   std::filesystem::remove(dir / "nf_cli_a.hair");
   std::filesystem::remove(dir / "nf_cli_bad.hair");
+}
+
+TEST_CASE("nf_gpu metrics compares meshes") {
+  const auto dir = std::filesystem::temp_directory_path();
+  nf::io::Mesh quad;
+  quad.positions = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+  quad.triangles = {0, 1, 2, 0, 2, 3};
+  nf::io::write_mesh(dir / "nf_cli_quad.ply", quad);
+  for (std::size_t i = 2; i < quad.positions.size(); i += 3) quad.positions[i] = 0.1f;  // 0.1 units higher
+  nf::io::write_mesh(dir / "nf_cli_quad_up.obj", quad);
+  const Result r = run("metrics --mesh " + (dir / "nf_cli_quad_up.obj").string() + " --ref " +
+                       (dir / "nf_cli_quad.ply").string() + " --scale 10 --json");  // 10 cm per unit: 10 mm apart
+  REQUIRE(r.code == 0);
+  const nf::json m = nf::json::parse(r.output);
+  CHECK(m["surface"]["accuracy_mm"].get<double>() == doctest::Approx(10).epsilon(0.02));
+  CHECK(run("metrics --mesh " + (dir / "nf_cli_quad.ply").string()).code == 2);  // --ref missing
+  std::filesystem::remove(dir / "nf_cli_quad.ply");
+  std::filesystem::remove(dir / "nf_cli_quad_up.obj");
 }
 
 TEST_CASE("usage errors exit with 2") {
