@@ -1,5 +1,6 @@
 #include "engine/bench/nn_suite.hpp"
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -116,7 +117,9 @@ json bench_net(gpu::Context& ctx, const NetSpec& net, const Options& options, do
 
   gpu::Stream s(ctx);
   std::vector<float> losses;
+  std::vector<double> step_seconds;
   const Timing train = time_repeats(repeats, nullptr, [&] {
+    const auto start = std::chrono::steady_clock::now();
     if (net.encoding == Encoding::Frequency) frequency.forward(s, d_raw, encoded, batch);
     if (net.encoding == Encoding::HashGrid) {
       s.fill(table_grad->whole(), 0);
@@ -131,6 +134,7 @@ json bench_net(gpu::Context& ctx, const NetSpec& net, const Options& options, do
     if (table_adam) table_adam->step(s, *table, *table_grad, 1e-2f);
     s.submit_and_wait();
     losses.push_back(loss.download()[0]);
+    step_seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     return -1.0;
   });
   const double mlp_flops = double(batch) * (mlp.forward_flops_per_sample() + mlp.backward_flops_per_sample());
@@ -166,7 +170,13 @@ json bench_net(gpu::Context& ctx, const NetSpec& net, const Options& options, do
                                                                 : "none"},
               {"batch", batch},
               {"step", "encoding + mlp forward, mse, mlp backward (+ encoding backward), AdamW"}};
-  return make_record(ctx, kSuite, net.name + "_train", params, train, metrics);
+  json record = make_record(ctx, kSuite, net.name + "_train", params, train, metrics);
+  // Error against time: the training loss after each step (warm-up included), at cumulative seconds.
+  json curve = json::array();
+  double elapsed = 0;
+  for (std::size_t i = 0; i < losses.size(); ++i) curve.push_back({elapsed += step_seconds[i], losses[i]});
+  record["curve"] = {{"x", "seconds"}, {"y", "training loss (mse)"}, {"points", curve}};
+  return record;
 }
 
 }  // namespace

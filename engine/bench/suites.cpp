@@ -15,6 +15,15 @@ json run_suite(gpu::Context& context, const Options& options) {
   throw UsageError("unknown bench suite '" + options.suite + "'");
 }
 
-void write_records(const std::string& path, const json& records) { write_file_atomic(path, records.dump(2) + "\n"); }
+void write_records(const std::string& path, const json& records) {
+  // `.jsonl`: one record per line (easy to append and stream); anything else: one JSON array.
+  if (path.size() > 6 && path.substr(path.size() - 6) == ".jsonl") {
+    std::string lines;
+    for (const auto& r : records) lines += r.dump() + "\n";
+    write_file_atomic(path, lines);
+    return;
+  }
+  write_file_atomic(path, records.dump(2) + "\n");
+}
 
 }  // namespace nf::bench

@@ -22,7 +22,8 @@ struct Options {
 
 std::vector<std::string> suite_names();
 json run_suite(gpu::Context& context, const Options& options);
-// Writes the records as a JSON array, atomically.
+// Writes the records atomically: JSON lines for a `.jsonl` path, else one JSON array. A record may
+// carry "curve": {"x", "y", "points": [[x, y], ...]}, an error-against-time series.
 void write_records(const std::string& path, const json& records);
 
 }  // namespace nf::bench
