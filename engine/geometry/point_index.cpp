@@ -3,6 +3,7 @@
 #include <nanoflann.hpp>
 
 #include <algorithm>
+#include <exception>
 #include <thread>
 
 #include "engine/core/error.hpp"
@@ -25,9 +26,8 @@ using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<fl
 struct PointIndex::Impl {
   Cloud cloud;
   Tree tree;
-  explicit Impl(std::span<const float> xyz) : cloud{xyz}, tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16)) {
-    tree.buildIndex();
-  }
+  // nanoflann 1.4 builds the tree in its constructor.
+  explicit Impl(std::span<const float> xyz) : cloud{xyz}, tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16)) {}
 };
 
 PointIndex::PointIndex(std::span<const float> xyz) {
@@ -60,12 +60,27 @@ std::vector<std::uint32_t> PointIndex::nearest_k(const float query[3], std::size
 void parallel_for(std::size_t count, const std::function<void(std::size_t, std::size_t)>& body) {
   const std::size_t threads = std::max<std::size_t>(1, std::min<std::size_t>(std::thread::hardware_concurrency(), count / 1024 + 1));
   std::vector<std::thread> pool;
+  std::vector<std::exception_ptr> errors(threads);
   const std::size_t chunk = (count + threads - 1) / threads;
-  for (std::size_t t = 0; t < threads; ++t) {
-    const std::size_t begin = t * chunk, end = std::min(count, begin + chunk);
-    if (begin < end) pool.emplace_back(body, begin, end);
+  try {
+    for (std::size_t t = 0; t < threads; ++t) {
+      const std::size_t begin = t * chunk, end = std::min(count, begin + chunk);
+      if (begin < end)
+        pool.emplace_back([&, t, begin, end] {
+          try {
+            body(begin, end);
+          } catch (...) {
+            errors[t] = std::current_exception();  // rethrown on the calling thread
+          }
+        });
+    }
+  } catch (...) {
+    for (auto& th : pool) th.join();
+    throw;
   }
   for (auto& th : pool) th.join();
+  for (auto& e : errors)
+    if (e) std::rethrow_exception(e);
 }
 
 }  // namespace nf::geometry

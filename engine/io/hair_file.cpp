@@ -79,6 +79,9 @@ StrandSet read_hair(const std::filesystem::path& path) {
                      std::to_string(h.point_count) + " points) need " + std::to_string(need) + " bytes but " +
                      std::to_string(in.remaining()) + " follow the header (truncated, or a count is wrong)");
   if (h.point_count && !h.hair_count) throw InputError(where + ": points but no strands");
+  if (h.hair_count > h.point_count)  // every strand has a point: this also bounds the allocation below
+    throw InputError(where + ": hair count " + std::to_string(h.hair_count) + " exceeds the point count " +
+                     std::to_string(h.point_count));
   StrandSet s;
   s.offsets.resize(std::size_t(h.hair_count) + 1, 0);
   std::vector<std::uint16_t> segments(h.hair_count, std::uint16_t(h.default_segments));
@@ -103,6 +106,11 @@ StrandSet read_hair(const std::filesystem::path& path) {
   }
   if (in.remaining())
     throw InputError(where + ": " + std::to_string(in.remaining()) + " bytes follow the last array (counts disagree)");
+  // Absent arrays take the header's defaults, when those differ from the format's neutral values.
+  if (!(h.arrays & kThickness) && h.default_thickness != 1.f) s.thickness.assign(h.point_count, h.default_thickness);
+  if (!(h.arrays & kTransparency) && h.default_transparency != 0.f) s.transparency.assign(h.point_count, h.default_transparency);
+  if (!(h.arrays & kColors) && (h.default_color[0] != 1.f || h.default_color[1] != 1.f || h.default_color[2] != 1.f))
+    for (std::uint32_t p = 0; p < h.point_count; ++p) s.colors.insert(s.colors.end(), h.default_color, h.default_color + 3);
   s.validate(where);
   return s;
 }

@@ -2,6 +2,7 @@
 // property layout, keeps what the engine uses (positions, normals, an integer region / label,
 // faces) and skips the rest; the writer produces binary little-endian.
 #include <charconv>
+#include <cmath>
 #include <cstring>
 #include <sstream>
 
@@ -83,7 +84,9 @@ Mesh read_mesh_ply(const std::filesystem::path& path) {
   const std::string head(bytes.begin(), bytes.begin() + std::ptrdiff_t(std::min<std::size_t>(bytes.size(), 65536)));
   const std::size_t end = head.find("end_header");
   if (head.rfind("ply", 0) != 0 || end == std::string::npos) throw InputError(where + ": not a PLY file");
-  const std::size_t data = head.find('\n', end) + 1;
+  const std::size_t newline = head.find('\n', end);
+  if (newline == std::string::npos) throw InputError(where + ": PLY header does not end with a line break");
+  const std::size_t data = newline + 1;
   std::istringstream lines(head.substr(0, end));
   std::string line;
   bool ascii = false, format_seen = false;
@@ -131,7 +134,7 @@ Mesh read_mesh_ply(const std::filesystem::path& path) {
     if (e.count > bytes.size()) throw InputError(where + ": element '" + e.name + "' count " + std::to_string(e.count) + " exceeds the file");
     bool has_normals = false, has_region = false;
     for (const Property& p : e.properties) {
-      has_normals |= vertex && p.name == "nx";
+      has_normals |= vertex && (p.name == "nx" || p.name == "ny" || p.name == "nz");
       has_region |= vertex && (p.name == "region" || p.name == "label" || p.name == "segment");
     }
     if (vertex) {
@@ -144,11 +147,13 @@ Mesh read_mesh_ply(const std::filesystem::path& path) {
         const std::string field = "element '" + e.name + "' " + std::to_string(i) + " property '" + p.name + "'";
         if (p.list) {
           const double n = in.read(p.count_type, field + " count");
-          if (n < 0 || n > 1e6) throw InputError(where + ": " + field + " has a list of " + std::to_string(n) + " items");
+          if (!(n >= 0 && n <= 1e6) || n != std::floor(n))
+            throw InputError(where + ": " + field + " has a list of " + std::to_string(n) + " items");
           std::vector<std::uint32_t> items(static_cast<std::size_t>(n));
           for (auto& item : items) {
             const double v = in.read(p.type, field);
-            if (v < 0) throw InputError(where + ": " + field + " holds the negative index " + std::to_string(v));
+            if (!(v >= 0 && v < 4294967296.0) || v != std::floor(v))
+              throw InputError(where + ": " + field + " holds the index " + std::to_string(v));
             item = std::uint32_t(v);
           }
           if (face && (p.name == "vertex_indices" || p.name == "vertex_index")) {
@@ -166,7 +171,11 @@ Mesh read_mesh_ply(const std::filesystem::path& path) {
         else if (p.name == "nx") m.normals[3 * i] = float(v);
         else if (p.name == "ny") m.normals[3 * i + 1] = float(v);
         else if (p.name == "nz") m.normals[3 * i + 2] = float(v);
-        else if (p.name == "region" || p.name == "label" || p.name == "segment") m.regions[i] = std::int32_t(v);
+        else if (p.name == "region" || p.name == "label" || p.name == "segment") {
+          if (!(v >= -2147483648.0 && v <= 2147483647.0) || v != std::floor(v))
+            throw InputError(where + ": " + field + " is not an integer region (" + std::to_string(v) + ")");
+          m.regions[i] = std::int32_t(v);
+        }
       }
     }
   }

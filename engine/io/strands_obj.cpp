@@ -1,4 +1,5 @@
 // Strands as Wavefront OBJ: `v x y z` lines, then one `l i j k ...` polyline per strand (1-based).
+#include <cctype>
 #include <charconv>
 #include <fstream>
 #include <sstream>
@@ -60,6 +61,8 @@ StrandSet read_strands_obj(const std::filesystem::path& path) {
       std::istringstream words(line.substr(2));
       long long index;
       while (words >> index) {
+        if (!words.eof() && !std::isspace(words.peek()))
+          throw InputError(where + ": line " + std::to_string(number) + ": a polyline lists vertex indices only");
         const long long n = std::int64_t(vertices.size() / 3);
         if (index < 0) index = n + index + 1;  // OBJ negative indices count back from the last vertex
         if (index < 1 || index > n)
@@ -67,6 +70,8 @@ StrandSet read_strands_obj(const std::filesystem::path& path) {
                            " is outside 1.." + std::to_string(n));
         s.points.insert(s.points.end(), vertices.begin() + (index - 1) * 3, vertices.begin() + index * 3);
       }
+      if (!words.eof())
+        throw InputError(where + ": line " + std::to_string(number) + ": '" + line + "' is not a list of vertex indices");
       s.offsets.push_back(std::uint32_t(s.points.size() / 3));
     }
   }

@@ -59,6 +59,7 @@ StrandSet read_strands_ply(const std::filesystem::path& path) {
   std::string line, current;
   std::uint64_t vertices = 0, edges = 0, strands = 0;
   bool thick = false, has_strand_element = false;
+  std::string layout, order;
   while (std::getline(lines, line)) {
     std::istringstream words(line);
     std::string word;
@@ -67,18 +68,25 @@ StrandSet read_strands_ply(const std::filesystem::path& path) {
       std::uint64_t count = 0;
       words >> current >> count;
       if (!words) throw InputError(where + ": bad element line '" + line + "'");
+      order += current + " ";
       if (current == "vertex") vertices = count;
       else if (current == "edge") edges = count;
       else if (current == "strand") strands = count, has_strand_element = true;
       else throw InputError(where + ": unexpected element '" + current + "'");
-    } else if (word == "property" && current == "vertex") {
+    } else if (word == "property") {
+      // The layout this reader supports is exactly the one write_strands_ply produces.
       std::string type, name;
       words >> type >> name;
-      if (type != "float") throw InputError(where + ": vertex property '" + name + "' must be float");
-      if (name == "thickness") thick = true;
-      else if (name != "x" && name != "y" && name != "z") throw InputError(where + ": unexpected vertex property '" + name + "'");
+      layout += current + ":" + type + ":" + name + " ";
+      if (current == "vertex" && name == "thickness") thick = true;
     }
   }
+  const std::string expected =
+      std::string("vertex:float:x vertex:float:y vertex:float:z ") + (thick ? "vertex:float:thickness " : "") +
+      "edge:int:vertex1 edge:int:vertex2 " + (has_strand_element ? "strand:int:first strand:int:count strand:ushort:region " : "");
+  if (layout != expected || (order != "vertex edge " && order != "vertex edge strand "))
+    throw InputError(where + ": strand PLY layout is not the one nf_gpu reads (vertex x y z [thickness] as float, "
+                             "edge vertex1 vertex2 as int, strand first count as int and region as ushort)");
   ByteReader in(bytes, where);
   in.seek(end + std::string("end_header\n").size());
   const std::uint64_t stride = thick ? 4 : 3;
@@ -101,10 +109,11 @@ StrandSet read_strands_ply(const std::filesystem::path& path) {
       const auto first = in.value<std::int32_t>("strand " + std::to_string(i) + " first");
       const auto count = in.value<std::int32_t>("strand " + std::to_string(i) + " count");
       const auto region = in.value<std::uint16_t>("strand " + std::to_string(i) + " region");
-      if (first != std::int32_t(s.offsets.back()) || count < 0)
+      const std::int64_t next = std::int64_t(first) + count;
+      if (first != std::int64_t(s.offsets.back()) || count < 0 || next > std::int64_t(vertices))
         throw InputError(where + ": strand " + std::to_string(i) + " (first " + std::to_string(first) + ", count " +
                          std::to_string(count) + ") does not follow the previous strand");
-      s.offsets.push_back(std::uint32_t(first + count));
+      s.offsets.push_back(std::uint32_t(next));
       s.regions.push_back(region);
     }
   } else {

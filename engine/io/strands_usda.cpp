@@ -91,12 +91,16 @@ StrandSet read_strands_usda(const std::filesystem::path& path) {
   StrandSet s;
   if (!counts.empty()) s.offsets.push_back(0);
   for (double c : counts) {
-    if (c < 0 || c != std::floor(c)) throw InputError(where + ": curveVertexCounts holds " + std::to_string(c));
+    if (!(c >= 0 && c <= double(UINT32_MAX - s.offsets.back())) || c != std::floor(c))
+      throw InputError(where + ": curveVertexCounts holds " + std::to_string(c));
     s.offsets.push_back(s.offsets.back() + std::uint32_t(c));
   }
   s.points.assign(points.begin(), points.end());
   s.thickness.assign(widths.begin(), widths.end());
-  for (double r : regions) s.regions.push_back(std::uint16_t(r));
+  for (double r : regions) {
+    if (!(r >= 0 && r <= 65535) || r != std::floor(r)) throw InputError(where + ": primvars:region holds " + std::to_string(r));
+    s.regions.push_back(std::uint16_t(r));
+  }
   s.validate(where);
   return s;
 }

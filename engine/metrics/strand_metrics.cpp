@@ -86,9 +86,10 @@ StrandSample sample_strands(const io::StrandSet& set, std::uint32_t max_strands,
   s.points = points;
   for (std::uint32_t strand : chosen) {
     const std::uint32_t first = set.offsets[strand], n = set.points_in(strand);
-    if (n == 0) continue;
+    if (n < 2) continue;  // a lone point has no direction: nothing to compare
     std::vector<double> arc(n, 0.0);
     for (std::uint32_t p = 1; p < n; ++p) arc[p] = arc[p - 1] + norm(sub(at(set.points, first + p), at(set.points, first + p - 1)));
+    if (!(arc.back() > 0)) continue;  // zero length: no direction either
     for (std::uint32_t k = 0; k < points; ++k) {
       const double target = arc.back() * k / (points - 1);
       std::uint32_t p = std::uint32_t(std::upper_bound(arc.begin(), arc.end(), target) - arc.begin());
@@ -133,6 +134,7 @@ ConsistencyMetrics consistency_metrics(const StrandSample& s, double cm_per_unit
   ConsistencyMetrics m;
   const std::uint32_t N = s.strands, M = s.points;
   if (N == 0) return m;
+  if (M < 3) throw InputError("metrics: consistency needs at least 3 points per strand (bending angles)");
   std::vector<double> length(N, 0.0), theta(std::size_t(N) * (M - 2), 0.0);
   std::vector<V3> mean_dir(N), first_dir(N);
   std::vector<float> roots(std::size_t(N) * 3);

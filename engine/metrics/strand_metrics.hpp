@@ -19,6 +19,7 @@ struct StrandSample {
 };
 
 // At most `max_strands` strands (a seeded random subset when there are more), `points` per strand.
+// Strands without length (one point, or all points equal) carry no direction and are skipped.
 StrandSample sample_strands(const io::StrandSet& set, std::uint32_t max_strands, std::uint32_t points, unsigned seed);
 
 struct MatchThreshold {

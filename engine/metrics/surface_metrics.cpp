@@ -70,6 +70,7 @@ SurfaceMetrics surface_metrics(const io::Mesh& mesh, const io::Mesh& reference, 
 TipChamfer tip_chamfer(const StrandSample& strands, const io::Mesh& outer, double cm_per_unit, std::uint64_t samples,
                        unsigned seed) {
   if (!(cm_per_unit > 0)) throw InputError("metrics: the scene scale (cm per unit) must be positive");
+  if (strands.points < 1) throw InputError("tip chamfer: strands have no points");
   std::vector<float> tips;
   for (std::uint32_t i = 0; i < strands.strands; ++i) {
     const std::size_t last = (std::size_t(i) + 1) * strands.points - 1;
@@ -77,7 +78,8 @@ TipChamfer tip_chamfer(const StrandSample& strands, const io::Mesh& outer, doubl
   }
   const auto surface = geometry::sample_surface(outer, samples, seed);
   TipChamfer c;
-  if (tips.empty() || surface.points.empty()) return c;
+  if (surface.points.empty()) throw InputError("tip chamfer: the outer surface has no area to sample");
+  if (tips.empty()) throw InputError("tip chamfer: no strands");
   const double mm = cm_per_unit * 10.0;
   c.tips_to_surface_mm = mean(nearest_to(tips, {}, surface.points, {}).distance) * mm;
   c.surface_to_tips_mm = mean(nearest_to(surface.points, {}, tips, {}).distance) * mm;

@@ -1,0 +1,43 @@
+#include "engine/io/scene.hpp"
+
+#include <cmath>
+
+#include "engine/core/error.hpp"
+
+namespace nf::io {
+
+glm::dvec3 Camera::project(const glm::dvec3& world) const {
+  const glm::dvec4 c = glm::inverse(camera_to_world) * glm::dvec4(world, 1.0);
+  const double depth = -c.z;  // OpenGL: the camera looks down -z
+  return {cx + fx * c.x / depth, cy - fy * c.y / depth, depth};
+}
+
+glm::dmat4 opencv_to_opengl(const glm::dmat4& c2w) {
+  glm::dmat4 flip(1.0);
+  flip[1][1] = -1.0;
+  flip[2][2] = -1.0;
+  return c2w * flip;
+}
+
+void Scene::validate(const std::string& source) const {
+  if (cameras.empty()) throw InputError(source + ": no cameras");
+  for (const Camera& c : cameras) {
+    const std::string where = source + ": camera '" + c.name + "'";
+    if (c.width == 0 || c.height == 0 || c.width > 65536 || c.height > 65536)
+      throw InputError(where + ": image size " + std::to_string(c.width) + "x" + std::to_string(c.height) + " is invalid");
+    for (double v : {c.fx, c.fy, c.cx, c.cy})
+      if (!std::isfinite(v)) throw InputError(where + ": intrinsics are not finite");
+    if (!(c.fx > 0) || !(c.fy > 0)) throw InputError(where + ": focal lengths must be positive");
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j)
+        if (!std::isfinite(c.camera_to_world[i][j])) throw InputError(where + ": pose is not finite");
+    const glm::dmat3 r(c.camera_to_world);
+    const glm::dmat3 rrt = r * glm::transpose(r);
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (std::fabs(rrt[i][j] - (i == j ? 1.0 : 0.0)) > 1e-3)
+          throw InputError(where + ": the pose's rotation is not orthonormal (scaled or sheared transform)");
+  }
+}
+
+}  // namespace nf::io

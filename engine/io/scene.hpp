@@ -1,0 +1,49 @@
+#pragma once
+// A multi-view scene: per camera, pinhole intrinsics, the camera-to-world pose in the OpenGL
+// convention (x right, y up, the camera looks down -z; DESIGN §5) and where its image and mask are.
+// Readers for the formats users have (nerfstudio / instant-ngp transforms.json, NeuS
+// cameras_sphere.npz, Artemis CamPose.inf, COLMAP text models) all produce this; images are opened
+// lazily by the stages that need them.
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace nf::io {
+
+struct Camera {
+  std::string name;
+  std::uint32_t width = 0, height = 0;
+  double fx = 0, fy = 0, cx = 0, cy = 0;
+  glm::dmat4 camera_to_world{1.0};  // OpenGL axes
+  std::filesystem::path image, mask;  // may be empty
+
+  // Pixel coordinates (x right, y down, origin at the top-left corner) of a world point, and its
+  // depth along the viewing direction (positive in front of the camera).
+  glm::dvec3 project(const glm::dvec3& world) const;
+};
+
+struct Scene {
+  std::filesystem::path root;
+  std::vector<Camera> cameras;
+  std::optional<double> cm_per_unit;  // when the file declares metric units
+  // Throws InputError naming the file and the camera and field that are wrong.
+  void validate(const std::string& source) const;
+};
+
+Scene read_transforms_json(const std::filesystem::path& file);
+void write_transforms_json(const std::filesystem::path& file, const Scene& scene);
+Scene read_neus_scene(const std::filesystem::path& folder);      // cameras_sphere.npz, image/, mask/
+Scene read_artemis_scene(const std::filesystem::path& folder);   // CamPose.inf, Intrinsic.inf, img_XXXX.jpg
+Scene read_colmap_scene(const std::filesystem::path& folder, const std::filesystem::path& masks = {});  // cameras.txt, images.txt
+
+// A folder in any of the formats above (or a transforms.json file).
+Scene read_scene(const std::filesystem::path& path);
+
+// OpenCV camera axes (x right, y down, z forward) <-> OpenGL (x right, y up, -z forward).
+glm::dmat4 opencv_to_opengl(const glm::dmat4& camera_to_world_cv);
+
+}  // namespace nf::io
