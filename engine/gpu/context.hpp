@@ -9,12 +9,11 @@
 #include <vector>
 
 #include "engine/gpu/device_info.hpp"
+#include "engine/gpu/kernel.hpp"  // SpecConstant: a default argument needs the complete type
 
 namespace nf::gpu {
 
-class Kernel;
 class RawBuffer;
-struct SpecConstant;
 
 struct ContextOptions {
   std::string device;                  // NF_DEVICE: index or case-insensitive name substring; "" = best
