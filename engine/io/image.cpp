@@ -1,0 +1,139 @@
+#include "engine/io/image.hpp"
+
+#include <stb/stb_image.h>
+#include <stb/stb_image_write.h>
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfIO.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <string>
+
+#include "engine/core/atomic_file.hpp"
+#include "engine/core/error.hpp"
+#include "engine/io/binary_io.hpp"
+
+namespace nf::io {
+namespace {
+
+// OpenEXR writes through this so that the file goes out atomically like every other writer.
+class OStreamAdapter : public Imf::OStream {
+ public:
+  explicit OStreamAdapter(std::ostream& out) : Imf::OStream("nf_gpu"), out_(out) {}
+  void write(const char c[], int n) override { out_.write(c, n); }
+  uint64_t tellp() override { return std::uint64_t(out_.tellp()); }
+  void seekp(uint64_t pos) override { out_.seekp(std::streamoff(pos)); }
+
+ private:
+  std::ostream& out_;
+};
+
+Image read_exr(const std::filesystem::path& path) {
+  try {
+    Imf::InputFile file(path.c_str());
+    const Imath::Box2i window = file.header().dataWindow();
+    const long long w = window.max.x - window.min.x + 1, h = window.max.y - window.min.y + 1;
+    if (w <= 0 || h <= 0 || w > 65536 || h > 65536) throw InputError(path.string() + ": image size out of range");
+    std::vector<std::string> names;
+    for (const char* c : {"R", "G", "B", "A"})
+      if (file.header().channels().findChannel(c)) names.emplace_back(c);
+    if (names.empty())
+      for (auto it = file.header().channels().begin(); it != file.header().channels().end() && names.empty(); ++it)
+        names.emplace_back(it.name());  // a single-channel image: Z, Y, depth...
+    if (names.empty()) throw InputError(path.string() + ": EXR without channels");
+    Image img;
+    img.width = std::uint32_t(w), img.height = std::uint32_t(h), img.channels = std::uint32_t(names.size());
+    img.pixels.assign(std::size_t(w) * std::size_t(h) * names.size(), 0.f);
+    Imf::FrameBuffer fb;
+    const std::size_t xstride = sizeof(float) * names.size(), ystride = xstride * std::size_t(w);
+    for (std::size_t c = 0; c < names.size(); ++c) {
+      char* base = reinterpret_cast<char*>(img.pixels.data() + c) - window.min.x * std::ptrdiff_t(xstride) -
+                   window.min.y * std::ptrdiff_t(ystride);
+      fb.insert(names[c], Imf::Slice(Imf::FLOAT, base, xstride, ystride));
+    }
+    file.setFrameBuffer(fb);
+    file.readPixels(window.min.y, window.max.y);
+    return img;
+  } catch (const nf::Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InputError(path.string() + ": cannot read EXR (" + e.what() + ")");
+  }
+}
+
+}  // namespace
+
+Image read_image(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  if (ext == ".exr") return read_exr(path);
+  const std::vector<char> bytes = read_file_bytes(path);
+  const auto* data = reinterpret_cast<const stbi_uc*>(bytes.data());
+  const int size = int(std::min<std::size_t>(bytes.size(), std::size_t(INT32_MAX)));
+  int w = 0, h = 0, c = 0;
+  if (!stbi_info_from_memory(data, size, &w, &h, &c))
+    throw InputError(path.string() + ": not a readable PNG or JPEG (" + stbi_failure_reason() + ")");
+  Image img;
+  if (stbi_is_16_bit_from_memory(data, size)) {
+    std::unique_ptr<stbi_us, void (*)(void*)> px(stbi_load_16_from_memory(data, size, &w, &h, &c, 0), stbi_image_free);
+    if (!px) throw InputError(path.string() + ": cannot decode (" + stbi_failure_reason() + ")");
+    img.pixels.resize(std::size_t(w) * h * c);
+    for (std::size_t i = 0; i < img.pixels.size(); ++i) img.pixels[i] = px.get()[i] / 65535.f;
+  } else {
+    std::unique_ptr<stbi_uc, void (*)(void*)> px(stbi_load_from_memory(data, size, &w, &h, &c, 0), stbi_image_free);
+    if (!px) throw InputError(path.string() + ": cannot decode (" + stbi_failure_reason() + ")");
+    img.pixels.resize(std::size_t(w) * h * c);
+    for (std::size_t i = 0; i < img.pixels.size(); ++i) img.pixels[i] = px.get()[i] / 255.f;
+  }
+  img.width = std::uint32_t(w), img.height = std::uint32_t(h), img.channels = std::uint32_t(c);
+  return img;
+}
+
+void write_png(const std::filesystem::path& path, const Image& img) {
+  if (img.channels < 1 || img.channels > 4 || img.pixels.size() != std::size_t(img.width) * img.height * img.channels)
+    throw InternalError("write_png: image of " + std::to_string(img.channels) + " channels does not match its size");
+  std::vector<std::uint8_t> bytes(img.pixels.size());
+  for (std::size_t i = 0; i < bytes.size(); ++i)
+    bytes[i] = std::uint8_t(std::lround(std::clamp(std::isfinite(img.pixels[i]) ? img.pixels[i] : 0.f, 0.f, 1.f) * 255.f));
+  std::string encoded;
+  const auto sink = [](void* context, void* data, int n) { static_cast<std::string*>(context)->append(static_cast<char*>(data), std::size_t(n)); };
+  if (!stbi_write_png_to_func(sink, &encoded, int(img.width), int(img.height), int(img.channels), bytes.data(),
+                              int(img.width * img.channels)))
+    throw InputError(path.string() + ": PNG encoding failed");
+  write_file_atomic(path, encoded);
+}
+
+void write_exr(const std::filesystem::path& path, const Image& img) {
+  if (img.channels < 1 || img.channels > 4 || img.pixels.size() != std::size_t(img.width) * img.height * img.channels)
+    throw InternalError("write_exr: image of " + std::to_string(img.channels) + " channels does not match its size");
+  static const char* rgba[] = {"R", "G", "B", "A"};
+  Imf::Header header(int(img.width), int(img.height));
+  for (std::uint32_t c = 0; c < img.channels; ++c)
+    header.channels().insert(img.channels == 1 ? "Y" : rgba[c], Imf::Channel(Imf::FLOAT));
+  write_file_atomic(path, [&](std::ostream& out) {
+    OStreamAdapter stream(out);
+    Imf::OutputFile file(stream, header);
+    Imf::FrameBuffer fb;
+    const std::size_t xstride = sizeof(float) * img.channels, ystride = xstride * img.width;
+    for (std::uint32_t c = 0; c < img.channels; ++c)
+      fb.insert(img.channels == 1 ? "Y" : rgba[c],
+                Imf::Slice(Imf::FLOAT, const_cast<char*>(reinterpret_cast<const char*>(img.pixels.data() + c)), xstride, ystride));
+    file.setFrameBuffer(fb);
+    file.writePixels(int(img.height));
+  });
+}
+
+std::vector<std::uint8_t> mask_of(const Image& img) {
+  const std::uint32_t channel = (img.channels == 2 || img.channels == 4) ? img.channels - 1 : 0;
+  std::vector<std::uint8_t> mask(std::size_t(img.width) * img.height);
+  for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = img.pixels[i * img.channels + channel] >= 0.5f ? 1 : 0;
+  return mask;
+}
+
+}  // namespace nf::io

@@ -1,0 +1,29 @@
+#pragma once
+// Images as the stages use them: width x height pixels of `channels` floats, row-major from the
+// top-left. 8- and 16-bit PNG and JPEG are scaled to [0, 1] (stb_image, from Debian's libstb);
+// OpenEXR keeps its float values (R, G, B, A, or a single channel such as Z or Y). Writers are
+// atomic: PNG (8 bit) and EXR (32-bit float).
+#include <cstdint>
+#include <filesystem>
+#include <vector>
+
+namespace nf::io {
+
+struct Image {
+  std::uint32_t width = 0, height = 0, channels = 0;
+  std::vector<float> pixels;  // width * height * channels
+  float at(std::uint32_t x, std::uint32_t y, std::uint32_t c) const {
+    return pixels[(std::size_t(y) * width + x) * channels + c];
+  }
+};
+
+// Throws InputError naming the file and the reason (missing, truncated, unsupported).
+Image read_image(const std::filesystem::path& path);
+void write_png(const std::filesystem::path& path, const Image& image);  // 8 bit, values clamped to [0, 1]
+void write_exr(const std::filesystem::path& path, const Image& image);  // 32-bit float channels
+
+// A mask from an image: its alpha channel when it has one (2 or 4 channels), else its first
+// channel, thresholded at 0.5. 1 = inside.
+std::vector<std::uint8_t> mask_of(const Image& image);
+
+}  // namespace nf::io

@@ -1,0 +1,79 @@
+// Images: PNG (8 and 16 bit) and JPEG through stb, OpenEXR through OpenEXR; masks from alpha.
+#include <doctest/doctest.h>
+
+#include <stb/stb_image_write.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "engine/core/error.hpp"
+#include "engine/io/image.hpp"
+#include "engine/io/image_size.hpp"
+
+using namespace nf;
+using namespace nf::io;
+namespace fs = std::filesystem;
+
+TEST_CASE("8-bit PNG round-trips exactly and gives its alpha as the mask") {
+  Image img{4, 3, 4, {}};
+  for (std::uint32_t i = 0; i < 4 * 3; ++i) img.pixels.insert(img.pixels.end(), {i / 255.f, 0.5f, 1.f, i % 2 ? 1.f : 0.f});
+  const fs::path path = fs::temp_directory_path() / "nf_test_image.png";
+  write_png(path, img);
+  const Image r = read_image(path);
+  CHECK(r.width == 4);
+  CHECK(r.height == 3);
+  CHECK(r.channels == 4);
+  for (std::size_t i = 0; i < img.pixels.size(); ++i) CHECK(r.pixels[i] == doctest::Approx(std::round(img.pixels[i] * 255) / 255));
+  const auto mask = mask_of(r);
+  CHECK(mask[0] == 0);
+  CHECK(mask[1] == 1);
+  CHECK(image_size(path) == std::pair<std::uint32_t, std::uint32_t>{4, 3});
+  fs::remove(path);
+}
+
+TEST_CASE("16-bit PNG keeps its precision") {
+  const Image r = read_image(fs::path(NF_TEST_DATA) / "gray16.png");
+  REQUIRE(r.channels == 1);
+  CHECK(r.at(1, 0, 0) == doctest::Approx(1000 / 65535.0).epsilon(1e-6));
+  CHECK(r.at(2, 1, 0) == doctest::Approx(7 / 65535.0).epsilon(1e-6));
+  CHECK(r.at(2, 0, 0) == 1.f);
+}
+
+TEST_CASE("JPEG decodes to the size and roughly the colour written") {
+  std::vector<unsigned char> rgb(16 * 8 * 3, 200);
+  const fs::path path = fs::temp_directory_path() / "nf_test_image.jpg";
+  REQUIRE(stbi_write_jpg(path.c_str(), 16, 8, 3, rgb.data(), 95));
+  const Image r = read_image(path);
+  CHECK(r.width == 16);
+  CHECK(r.height == 8);
+  CHECK(r.at(5, 5, 1) == doctest::Approx(200 / 255.0).epsilon(0.02));
+  fs::remove(path);
+}
+
+TEST_CASE("OpenEXR round-trips float values exactly, one channel or four") {
+  for (std::uint32_t channels : {1u, 4u}) {
+    Image img{5, 2, channels, {}};
+    for (std::uint32_t i = 0; i < 5 * 2 * channels; ++i) img.pixels.push_back(-3.5f + 0.37f * float(i) + (i == 3 ? 1e6f : 0.f));
+    const fs::path path = fs::temp_directory_path() / "nf_test_image.exr";
+    write_exr(path, img);
+    const Image r = read_image(path);
+    CHECK(r.channels == channels);
+    CHECK(r.pixels == img.pixels);
+    fs::remove(path);
+  }
+}
+
+TEST_CASE("broken images are refused with the file named") {
+  const fs::path path = fs::temp_directory_path() / "nf_test_broken.png";
+  std::ifstream in(fs::path(NF_TEST_DATA) / "gray16.png", std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::ofstream(path, std::ios::binary) << bytes.substr(0, 40);
+  CHECK_THROWS_WITH_AS(read_image(path), doctest::Contains("nf_test_broken.png"), InputError);
+  std::ofstream(fs::temp_directory_path() / "nf_test_broken.exr") << "not an exr";
+  CHECK_THROWS_WITH_AS(read_image(fs::temp_directory_path() / "nf_test_broken.exr"), doctest::Contains("cannot read EXR"),
+                       InputError);
+  CHECK_THROWS_WITH_AS(read_image(fs::temp_directory_path() / "nf_no_such.png"), doctest::Contains("cannot open"), InputError);
+  fs::remove(path);
+  fs::remove(fs::temp_directory_path() / "nf_test_broken.exr");
+}
