@@ -7,18 +7,9 @@
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
 #include "engine/io/mesh.hpp"
+#include "engine/io/text_io.hpp"
 
 namespace nf::io {
-namespace {
-
-void put(std::ostream& out, float v) {
-  char buffer[32];
-  const auto r = std::to_chars(buffer, buffer + sizeof buffer, v);
-  out.write(buffer, r.ptr - buffer);
-}
-
-}  // namespace
-
 Mesh read_mesh_obj(const std::filesystem::path& path) {
   const std::string where = path.string();
   std::ifstream in(path);
@@ -90,20 +81,12 @@ void write_mesh_obj(const std::filesystem::path& path, const Mesh& m) {
     out << "# nf_gpu mesh: " << m.vertex_count() << " vertices, " << m.triangle_count() << " triangles\n";
     for (std::uint64_t v = 0; v < m.vertex_count(); ++v) {
       out << "v ";
-      put(out, m.positions[3 * v]);
-      out << ' ';
-      put(out, m.positions[3 * v + 1]);
-      out << ' ';
-      put(out, m.positions[3 * v + 2]);
+      put_xyz(out, &m.positions[3 * v]);
       out << '\n';
     }
     for (std::uint64_t v = 0; v < (m.normals.empty() ? 0 : m.vertex_count()); ++v) {
       out << "vn ";
-      put(out, m.normals[3 * v]);
-      out << ' ';
-      put(out, m.normals[3 * v + 1]);
-      out << ' ';
-      put(out, m.normals[3 * v + 2]);
+      put_xyz(out, &m.normals[3 * v]);
       out << '\n';
     }
     const bool with_normals = !m.normals.empty();

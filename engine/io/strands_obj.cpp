@@ -7,29 +7,16 @@
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
 #include "engine/io/strand_files.hpp"
+#include "engine/io/text_io.hpp"
 
 namespace nf::io {
-namespace {
-
-void put_float(std::ostream& out, float v) {
-  char buffer[32];
-  const auto r = std::to_chars(buffer, buffer + sizeof buffer, v);
-  out.write(buffer, r.ptr - buffer);
-}
-
-}  // namespace
-
 void write_strands_obj(const std::filesystem::path& path, const StrandSet& s) {
   s.validate(path.string());
   write_file_atomic(path, [&](std::ostream& out) {
     out << "# nf_gpu strands: " << s.strand_count() << " polylines, " << s.point_count() << " points\n";
     for (std::uint64_t p = 0; p < s.point_count(); ++p) {
       out << "v ";
-      put_float(out, s.points[3 * p]);
-      out << ' ';
-      put_float(out, s.points[3 * p + 1]);
-      out << ' ';
-      put_float(out, s.points[3 * p + 2]);
+      put_xyz(out, &s.points[3 * p]);
       out << '\n';
     }
     for (std::uint32_t i = 0; i < s.strand_count(); ++i) {

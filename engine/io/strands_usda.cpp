@@ -9,15 +9,10 @@
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
 #include "engine/io/strand_files.hpp"
+#include "engine/io/text_io.hpp"
 
 namespace nf::io {
 namespace {
-
-void put(std::ostream& out, float v) {
-  char buffer[32];
-  const auto r = std::to_chars(buffer, buffer + sizeof buffer, v);
-  out.write(buffer, r.ptr - buffer);
-}
 
 // The numbers inside the brackets that follow `key` (parentheses and commas are separators).
 std::vector<double> numbers_after(const std::string& text, const std::string& key, const std::string& where) {
@@ -55,17 +50,13 @@ void write_strands_usda(const std::filesystem::path& path, const StrandSet& s, f
     out << "]\n    point3f[] points = [";
     for (std::uint64_t p = 0; p < s.point_count(); ++p) {
       out << (p ? ", (" : "(");
-      put(out, s.points[3 * p]);
-      out << ", ";
-      put(out, s.points[3 * p + 1]);
-      out << ", ";
-      put(out, s.points[3 * p + 2]);
+      put_xyz(out, &s.points[3 * p], ", ");
       out << ')';
     }
     out << "]\n    float[] widths = [";
     for (std::uint64_t p = 0; p < s.point_count(); ++p) {
       if (p) out << ", ";
-      put(out, s.thickness.empty() ? default_width : s.thickness[p]);
+      put_float(out, s.thickness.empty() ? default_width : s.thickness[p]);
     }
     out << "] (\n        interpolation = \"vertex\"\n    )\n";
     if (!s.regions.empty()) {

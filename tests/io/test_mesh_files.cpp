@@ -7,11 +7,14 @@
 #include <fstream>
 
 #include "engine/core/error.hpp"
+#include "tests/support/files.hpp"
 #include "engine/io/mesh.hpp"
 
 using namespace nf;
 using namespace nf::io;
 namespace fs = std::filesystem;
+using nf::test::slurp;
+using nf::test::spit;
 
 namespace {
 
@@ -30,8 +33,6 @@ Mesh tetrahedron(bool extras) {
   }
   return m;
 }
-
-void spit(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
 
 }  // namespace
 

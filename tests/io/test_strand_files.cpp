@@ -8,11 +8,14 @@
 #include <fstream>
 
 #include "engine/core/error.hpp"
+#include "tests/support/files.hpp"
 #include "engine/io/strand_files.hpp"
 
 using namespace nf;
 using namespace nf::io;
 namespace fs = std::filesystem;
+using nf::test::slurp;
+using nf::test::spit;
 
 namespace {
 
@@ -29,16 +32,6 @@ StrandSet sample() {
   }
   s.regions = {3, 0, 15};
   return s;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
-void spit(const fs::path& p, const std::string& bytes) {
-  std::ofstream out(p, std::ios::binary);
-  out.write(bytes.data(), std::streamsize(bytes.size()));
 }
 
 }  // namespace

@@ -6,12 +6,15 @@
 #include <fstream>
 
 #include "engine/core/error.hpp"
+#include "tests/support/files.hpp"
 #include "engine/nn/init.hpp"
 #include "engine/nn/weights_io.hpp"
 
 using namespace nf;
 using namespace nf::nn;
 namespace fs = std::filesystem;
+using nf::test::slurp;
+using nf::test::spit;
 
 namespace {
 
@@ -21,16 +24,6 @@ MlpConfig net() {
   c.hidden = {64, 128};
   c.output_dim = 5;
   return c;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
-void spit(const fs::path& p, const std::string& bytes) {
-  std::ofstream out(p, std::ios::binary);
-  out.write(bytes.data(), std::streamsize(bytes.size()));
 }
 
 }  // namespace
