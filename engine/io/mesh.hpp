@@ -30,7 +30,28 @@ void write_mesh_ply(const std::filesystem::path& path, const Mesh& mesh);
 Mesh read_mesh_obj(const std::filesystem::path& path);
 void write_mesh_obj(const std::filesystem::path& path, const Mesh& mesh);
 
-// By extension (.ply, .obj).
+// glTF 2.0. The reader takes .glb and .gltf (buffers in the GLB BIN chunk, in external files
+// relative to the .gltf, or in base64 data: URIs). It flattens the default scene (scenes[0] when
+// `scene` is unset; every mesh once, untransformed, when there are no scenes): node transforms
+// (matrix or TRS) are applied to positions and normals (inverse transpose; winding flipped under a
+// mirroring transform), and all primitives are merged into one mesh. Modes TRIANGLES, TRIANGLE_STRIP
+// and TRIANGLE_FAN become triangles, POINTS adds its vertices without faces, LINES / LINE_LOOP /
+// LINE_STRIP and primitives without POSITION are skipped with a logged warning. Indexed (u8, u16,
+// u32) and non-indexed primitives, byteStride and byte offsets are read. POSITION and NORMAL must be
+// FLOAT VEC3; the custom attribute _REGION (SCALAR: FLOAT holding integers, or BYTE, UNSIGNED_BYTE,
+// SHORT, UNSIGNED_SHORT, UNSIGNED_INT) becomes the regions. Normals / regions are kept only when
+// every merged primitive has them. Refused with an InputError naming the file and the field:
+// sparse accessors, accessors without a bufferView, quantized / Draco / meshopt geometry, non-file
+// URIs (http:), and any count, offset, stride or index out of range, NaN / Inf values, malformed
+// GLB chunks. Morph targets, skins and instancing extensions are ignored.
+// The writer produces GLB only (one scene / node / mesh / primitive; POSITION with min / max,
+// NORMAL, _REGION as FLOAT SCALAR, which Blender imports as a generic attribute, so regions must
+// lie within +-2^24; indices UNSIGNED_INT; a mesh without faces is written as POINTS). Writing
+// .gltf through write_mesh is refused: use .glb.
+Mesh read_mesh_gltf(const std::filesystem::path& path);
+void write_mesh_glb(const std::filesystem::path& path, const Mesh& mesh);
+
+// By extension (.ply, .obj, .glb, .gltf).
 Mesh read_mesh(const std::filesystem::path& path);
 void write_mesh(const std::filesystem::path& path, const Mesh& mesh);
 

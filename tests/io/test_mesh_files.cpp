@@ -1,12 +1,15 @@
-// Mesh files: PLY (binary and ASCII, extra properties skipped) and OBJ round trips, and malformed
-// files rejected with the file and the field named.
+// Mesh files: PLY (binary and ASCII, extra properties skipped), OBJ and GLB round trips, hand-built
+// glTF (external / embedded buffers, node transforms, strides, small indices), and malformed files
+// rejected with the file and the field named.
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
 #include "engine/core/error.hpp"
+#include "engine/core/json.hpp"
 #include "tests/support/files.hpp"
 #include "engine/io/mesh.hpp"
 
@@ -99,4 +102,275 @@ TEST_CASE("malformed meshes name the file and the field") {
   CHECK_THROWS_WITH_AS(read_mesh(temp("x.stl")), doctest::Contains("unknown mesh format"), InputError);
   fs::remove(ply);
   fs::remove(obj);
+}
+
+// ---- glTF 2.0 / GLB ----
+
+namespace {
+
+template <class T>
+std::string raw(std::initializer_list<T> values) {
+  std::string s(values.size() * sizeof(T), '\0');
+  std::memcpy(s.data(), std::data(values), s.size());
+  return s;
+}
+
+std::string glb(const std::string& text, const std::string& bin) {
+  std::string j = text, b = bin;
+  j.resize((j.size() + 3) / 4 * 4, ' ');
+  b.resize((b.size() + 3) / 4 * 4, '\0');
+  const auto total = std::uint32_t(12 + 8 + j.size() + (b.empty() ? 0 : 8 + b.size()));
+  std::string out = raw<std::uint32_t>({0x46546C67, 2, total, std::uint32_t(j.size()), 0x4E4F534A}) + j;
+  if (!b.empty()) out += raw<std::uint32_t>({std::uint32_t(b.size()), 0x004E4942}) + b;
+  return out;
+}
+
+std::string base64(const std::string& bytes) {
+  static const char* digits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  for (std::size_t i = 0; i < bytes.size(); i += 3) {
+    std::uint32_t v = std::uint32_t(std::uint8_t(bytes[i])) << 16;
+    if (i + 1 < bytes.size()) v |= std::uint32_t(std::uint8_t(bytes[i + 1])) << 8;
+    if (i + 2 < bytes.size()) v |= std::uint8_t(bytes[i + 2]);
+    out += digits[(v >> 18) & 63];
+    out += digits[(v >> 12) & 63];
+    out += i + 1 < bytes.size() ? digits[(v >> 6) & 63] : '=';
+    out += i + 2 < bytes.size() ? digits[v & 63] : '=';
+  }
+  return out;
+}
+
+// A triangle in the xy plane with +z normals and u32 indices: accessors 0 POSITION, 1 NORMAL, 2 indices.
+struct Asset {
+  nf::json doc;
+  std::string bin;
+};
+
+Asset triangle_asset() {
+  Asset a;
+  a.bin = raw<float>({0, 0, 0, 1, 0, 0, 0, 1, 0}) + raw<float>({0, 0, 1, 0, 0, 1, 0, 0, 1}) + raw<std::uint32_t>({0, 1, 2});
+  a.doc = nf::json::parse(R"({
+    "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+    "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}, "indices": 2}]}],
+    "accessors": [
+      {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"},
+      {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC3"},
+      {"bufferView": 2, "componentType": 5125, "count": 3, "type": "SCALAR"}],
+    "bufferViews": [{"buffer": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 36},
+                    {"buffer": 0, "byteOffset": 72, "byteLength": 12}],
+    "buffers": [{"byteLength": 84}]})");
+  return a;
+}
+
+void write_glb(const fs::path& path, const Asset& a) { spit(path, glb(a.doc.dump(), a.bin)); }
+
+}  // namespace
+
+TEST_CASE("GLB meshes round-trip exactly: with and without normals / regions, empty, one triangle, points") {
+  std::vector<Mesh> meshes = {tetrahedron(false), tetrahedron(true), Mesh{}};
+  meshes[1].regions = {-7, 0, 16777216, 42};
+  Mesh one;
+  one.positions = {0.1f, -2.5f, 3e-8f, 1e6f, 0, 0, 0, 1, -0.f};
+  one.triangles = {0, 1, 2};
+  meshes.push_back(one);
+  Mesh points = one;
+  points.triangles.clear();
+  points.regions = {1, 2, 3};
+  meshes.push_back(points);
+  const fs::path path = temp("round.glb");
+  for (std::size_t k = 0; k < meshes.size(); ++k) {
+    CAPTURE(k);
+    write_mesh(path, meshes[k]);
+    const std::string bytes = slurp(path);
+    REQUIRE(bytes.size() % 4 == 0);
+    CHECK(bytes.substr(0, 4) == "glTF");
+    const Mesh r = read_mesh(path);
+    CHECK(r.positions == meshes[k].positions);
+    CHECK(r.triangles == meshes[k].triangles);
+    CHECK(r.normals == meshes[k].normals);
+    CHECK(r.regions == meshes[k].regions);
+  }
+  // What the writer declares: generator, min / max, _REGION as FLOAT, indices as UNSIGNED_INT.
+  write_mesh_glb(path, tetrahedron(true));
+  const std::string bytes = slurp(path);
+  std::uint32_t json_length;
+  std::memcpy(&json_length, bytes.data() + 12, 4);
+  const nf::json doc = nf::json::parse(bytes.substr(20, json_length));
+  CHECK(doc["asset"]["generator"] == "nf_gpu");
+  CHECK(doc["accessors"][0]["max"] == nf::json::array({1.0, 1.0, 1.0}));
+  const auto& prim = doc["meshes"][0]["primitives"][0];
+  CHECK(prim["mode"] == 4);
+  CHECK(doc["accessors"][prim["attributes"]["_REGION"].get<int>()]["componentType"] == 5126);
+  CHECK(doc["accessors"][prim["indices"].get<int>()]["componentType"] == 5125);
+  Mesh big = tetrahedron(true);
+  big.regions[2] = 16777217;
+  CHECK_THROWS_WITH_AS(write_mesh_glb(path, big), doctest::Contains("vertex 2"), InputError);
+  CHECK_THROWS_WITH_AS(write_mesh(temp("x.gltf"), big), doctest::Contains("use .glb"), InputError);
+  fs::remove(path);
+}
+
+TEST_CASE(".gltf with an external .bin or a base64 data URI, with a node hierarchy, is flattened") {
+  Asset a = triangle_asset();
+  // Root 0: translate (10,0,0), child 1: rotate 90 degrees about z and scale 2. Root 2: mirror x, z += 5.
+  const double h = std::sqrt(0.5);
+  a.doc["scenes"][0]["nodes"] = {0, 2};
+  a.doc["nodes"] = nf::json::array({nf::json{{"translation", {10, 0, 0}}, {"children", {1}}},
+                                    nf::json{{"rotation", {0, 0, h, h}}, {"scale", {2, 2, 2}}, {"mesh", 0}},
+                                    nf::json{{"matrix", {-1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 5, 1}}, {"mesh", 0}}});
+  const fs::path gltf = temp("tri.gltf"), bin = temp("tri data.bin");
+  spit(bin, a.bin);
+  a.doc["buffers"][0]["uri"] = "nf_test_mesh_tri%20data.bin";
+  spit(gltf, a.doc.dump(2));
+  const Mesh external = read_mesh(gltf);
+  a.doc["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64(a.bin);
+  spit(gltf, a.doc.dump());
+  const Mesh embedded = read_mesh(gltf);
+  for (const Mesh* m : {&external, &embedded}) {
+    REQUIRE(m->vertex_count() == 6);
+    const std::vector<float> expected = {10, 0, 0, 10, 2, 0, 8, 0, 0, 0, 0, 5, -1, 0, 5, 0, 1, 5};
+    for (std::size_t i = 0; i < expected.size(); ++i) CHECK(m->positions[i] == doctest::Approx(expected[i]).epsilon(1e-6));
+    for (std::size_t v = 0; v < 6; ++v) CHECK(m->normals[3 * v + 2] == doctest::Approx(1.0));
+    CHECK(m->triangles == std::vector<std::uint32_t>{0, 1, 2, 3, 5, 4});  // the mirrored copy keeps CCW
+    CHECK(m->regions.empty());
+  }
+  fs::remove(bin);
+  CHECK_THROWS_WITH_AS(read_mesh(gltf.string() + "x"), doctest::Contains("unknown mesh format"), InputError);
+  a.doc["buffers"][0]["uri"] = "nf_test_mesh_tri%20data.bin";
+  spit(gltf, a.doc.dump());
+  CHECK_THROWS_WITH_AS(read_mesh(gltf), doctest::Contains("buffers[0].uri"), InputError);
+  a.doc["buffers"][0]["uri"] = "https://example.com/tri.bin";
+  spit(gltf, a.doc.dump());
+  CHECK_THROWS_WITH_AS(read_mesh(gltf), doctest::Contains("neither a relative file path"), InputError);
+  fs::remove(gltf);
+}
+
+TEST_CASE("glTF interleaved buffers (byteStride), u8 / u16 indices, integer _REGION, strips and fans") {
+  // 8 bytes of padding, then 4 vertices as px py pz nx ny nz (stride 24), then indices and regions.
+  std::string bin = std::string(8, 'x');
+  const float quad[4][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  for (const auto& q : quad) bin += raw<float>({q[0], q[1], q[2], 0, 0, 1});
+  const std::size_t indices_at = bin.size();
+  bin += raw<std::uint16_t>({0, 1, 2, 0, 2, 3}) + raw<std::uint8_t>({0, 1, 2, 0, 2, 3, 0, 0});
+  const std::size_t regions_at = bin.size();
+  bin += raw<std::uint16_t>({5, 5, 9, 9});
+  nf::json doc = nf::json::parse(R"({
+    "asset": {"version": "2.0"}, "meshes": [{"primitives": [
+      {"attributes": {"POSITION": 0, "NORMAL": 1, "_REGION": 3}, "indices": 2, "mode": 4}]}],
+    "accessors": [
+      {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3"},
+      {"bufferView": 0, "byteOffset": 12, "componentType": 5126, "count": 4, "type": "VEC3"},
+      {"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"},
+      {"bufferView": 2, "componentType": 5123, "count": 4, "type": "SCALAR"}],
+    "bufferViews": [{"buffer": 0, "byteOffset": 8, "byteLength": 96, "byteStride": 24},
+                    {"buffer": 0, "byteLength": 20}, {"buffer": 0, "byteLength": 8}]})");
+  doc["bufferViews"][1]["byteOffset"] = indices_at;
+  doc["bufferViews"][2]["byteOffset"] = regions_at;
+  doc["buffers"] = nf::json::array({nf::json{{"byteLength", bin.size()}}});
+  const fs::path path = temp("interleaved.glb");
+  const std::vector<std::uint32_t> two = {0, 1, 2, 0, 2, 3};
+  // No scenes: every mesh once, untransformed.
+  spit(path, glb(doc.dump(), bin));
+  Mesh m = read_mesh(path);
+  CHECK(m.positions == std::vector<float>{0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0});
+  CHECK(m.normals == std::vector<float>{0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1});
+  CHECK(m.triangles == two);
+  CHECK(m.regions == std::vector<std::int32_t>{5, 5, 9, 9});
+  // u8 indices: the same bytes after the six u16.
+  doc["accessors"][2]["componentType"] = 5121;
+  doc["accessors"][2]["byteOffset"] = 12;
+  spit(path, glb(doc.dump(), bin));
+  CHECK(read_mesh(path).triangles == two);
+  // Non-indexed strip and fan over the 4 vertices; lines are skipped.
+  doc["meshes"][0]["primitives"][0].erase("indices");
+  doc["meshes"][0]["primitives"][0]["mode"] = 5;
+  spit(path, glb(doc.dump(), bin));
+  CHECK(read_mesh(path).triangles == std::vector<std::uint32_t>{0, 1, 2, 1, 3, 2});
+  doc["meshes"][0]["primitives"][0]["mode"] = 6;
+  spit(path, glb(doc.dump(), bin));
+  CHECK(read_mesh(path).triangles == std::vector<std::uint32_t>{1, 2, 0, 2, 3, 0});
+  doc["meshes"][0]["primitives"][0]["mode"] = 1;
+  spit(path, glb(doc.dump(), bin));
+  CHECK(read_mesh(path).vertex_count() == 0);
+  fs::remove(path);
+}
+
+TEST_CASE("malformed glTF / GLB files name the file and the field") {
+  const fs::path path = temp("bad.glb");
+  const Asset good = triangle_asset();
+  auto fails = [&](const Asset& a, const char* expected) {
+    CAPTURE(expected);
+    write_glb(path, a);
+    CHECK_THROWS_WITH_AS(read_mesh(path), doctest::Contains(expected), InputError);
+  };
+  write_glb(path, good);
+  CHECK(read_mesh(path).triangle_count() == 1);
+  const std::string bytes = slurp(path);
+  spit(path, bytes.substr(0, bytes.size() - 5));
+  CHECK_THROWS_WITH_AS(read_mesh(path), doctest::Contains("GLB header length"), InputError);
+  spit(path, bytes.substr(0, 7));
+  CHECK_THROWS_WITH_AS(read_mesh(path), doctest::Contains("12-byte GLB header"), InputError);
+  spit(path, "glTX" + bytes.substr(4));
+  CHECK_THROWS_WITH_AS(read_mesh(path), doctest::Contains("GLB magic"), InputError);
+  std::string long_chunk = bytes;
+  long_chunk[12] = char(0xF0);
+  spit(path, long_chunk);
+  CHECK_THROWS_WITH_AS(read_mesh(path), doctest::Contains("GLB chunk 0 length"), InputError);
+  spit(path, glb("{\"asset\": {\"version\": \"2.0\"", ""));
+  CHECK_THROWS_WITH_AS(read_mesh(path), doctest::Contains("JSON chunk is malformed"), InputError);
+
+  Asset a = good;
+  a.doc["accessors"][0]["count"] = 100;
+  fails(a, "accessors[0].count 100 exceeds bufferViews[0]");
+  a = good;
+  a.doc["accessors"][1]["byteOffset"] = 4;
+  fails(a, "accessors[1].count 3 exceeds bufferViews[1]");
+  a = good;
+  a.doc["bufferViews"][2]["byteOffset"] = 80;
+  fails(a, "bufferViews[2]: byteOffset 80 + byteLength 12 exceeds buffers[0]");
+  a = good;
+  a.doc["buffers"][0]["byteLength"] = 1000;
+  fails(a, "buffers[0].byteLength 1000 exceeds the GLB BIN chunk");
+  a = good;
+  a.doc["accessors"][2]["count"] = 2;
+  fails(a, "accessors[2].count 2");
+  a = good;
+  a.bin.replace(72, 4, raw<std::uint32_t>({7}));
+  fails(a, "accessors[2] element 0 (meshes[0].primitives[0].indices) is vertex 7");
+  a = good;
+  a.bin.replace(12, 4, raw<float>({std::nanf("")}));
+  fails(a, "accessors[0] element 1 (meshes[0].primitives[0].attributes.POSITION) is nan");
+  a = good;
+  a.doc["accessors"][0]["sparse"] = nf::json::object();
+  fails(a, "accessors[0] (meshes[0].primitives[0].attributes.POSITION) is sparse");
+  a = good;
+  a.doc["accessors"][0]["componentType"] = 5123;
+  fails(a, "accessors[0].componentType 5123 (UNSIGNED_SHORT) is not read");
+  a = good;
+  a.doc["accessors"][1]["type"] = "VEC4";
+  fails(a, "accessors[1].type is 'VEC4', not VEC3");
+  a = good;
+  a.doc["accessors"][0]["count"] = 1.5;
+  fails(a, "accessors[0].count is 1.5");
+  a = good;
+  a.doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = 9;
+  fails(a, "meshes[0].primitives[0].attributes.POSITION is 9 but the file has 3 accessors");
+  a = good;
+  a.doc["bufferViews"][0]["byteStride"] = 4;
+  fails(a, "bufferViews[0].byteStride 4 is smaller");
+  a = good;
+  a.doc["nodes"][0]["children"] = {0};
+  fails(a, "nodes[0] is reached twice");
+  a = good;
+  a.doc["asset"]["version"] = "1.0";
+  fails(a, "asset.version is '1.0'");
+  a = good;
+  a.doc["extensionsRequired"] = {"KHR_draco_mesh_compression"};
+  fails(a, "extensionsRequired[0] is KHR_draco_mesh_compression");
+  a = good;
+  a.doc["nodes"][0]["matrix"] = {1, 0, 0};
+  fails(a, "nodes[0].matrix is not an array of 16 numbers");
+  a = good;
+  a.doc["buffers"][0]["uri"] = "data:application/octet-stream;base64,@@@";
+  fails(a, "buffers[0].uri");
+  fs::remove(path);
 }
