@@ -14,6 +14,7 @@
 #include "engine/io/mesh.hpp"
 #include "engine/metrics/strand_metrics.hpp"
 #include "engine/metrics/surface_metrics.hpp"
+#include "engine/synth/synth_scene.hpp"
 
 namespace {
 
@@ -146,6 +147,16 @@ int run_metrics(const MetricsOptions& o) {
   return 0;
 }
 
+int run_synth(const std::string& out, const nf::synth::SynthOptions& options) {
+  const json info = nf::synth::synthesize_scene(out, options);
+  std::printf("synth: %s, %u views at %ux%u, %u strands -> %s (%.1f s: body %.1f, fur %.1f, envelope %.1f, render %.1f)\n",
+              options.animal.c_str(), options.views, options.resolution, options.resolution, options.strands, out.c_str(),
+              info["timings"]["total_s"].get<double>(), info["timings"]["body_s"].get<double>(),
+              info["timings"]["fur_s"].get<double>(), info["timings"]["envelope_s"].get<double>(),
+              info["timings"]["render_s"].get<double>());
+  return 0;
+}
+
 int run_bench(const nf::bench::Options& options, const std::string& json_path, bool profile) {
   nf::gpu::Context context;
   const json records = nf::bench::run_suite(context, options);
@@ -197,6 +208,19 @@ int main(int argc, char** argv) {
   metrics->add_option("--seed", metrics_options.seed, "sampling seed");
   metrics->add_flag("--json", metrics_options.json_out, "machine-readable output");
 
+  nf::synth::SynthOptions synth_options;
+  std::string synth_out;
+  auto* synth = app.add_subcommand("synth", "a procedural furry quadruped with ground truth (images, masks, cameras, strands, meshes)");
+  synth->add_option("--animal", synth_options.animal, "cat, dog, fox, panda, tiger or lion")
+      ->check(CLI::IsMember({"cat", "dog", "fox", "panda", "tiger", "lion"}));
+  synth->add_option("--views", synth_options.views, "number of views, on two camera rings (default 36)")->check(CLI::Range(1, 10000));
+  synth->add_option("--res", synth_options.resolution, "image width and height in pixels (default 512)")->check(CLI::Range(8, 8192));
+  synth->add_option("--seed", synth_options.seed, "varies proportions, pose, fur and placement (default 1)");
+  synth->add_option("--strands", synth_options.strands, "ground-truth strands (default 100000)")->check(CLI::Range(1, 20000000));
+  synth->add_option("--spp-axis", synth_options.samples_per_axis, "anti-aliasing: s x s samples per pixel (default 3)")->check(CLI::Range(1, 16));
+  synth->add_option("--out", synth_out, "output folder (must be new, or an earlier synth scene with --overwrite)")->required();
+  synth->add_flag("--overwrite", synth_options.overwrite, "replace an earlier synth scene in --out");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -209,6 +233,7 @@ int main(int argc, char** argv) {
     if (*gradcheck) return run_gradcheck(kernel_name, gradcheck_json);
     if (*bench) return run_bench(bench_options, bench_json, profile);
     if (*metrics) return run_metrics(metrics_options);
+    if (*synth) return run_synth(synth_out, synth_options);
   } catch (const nf::Error& e) {
     std::cerr << "nf_gpu: error: " << e.what() << "\n";
     return int(e.code());

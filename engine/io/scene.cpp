@@ -1,8 +1,11 @@
 #include "engine/io/scene.hpp"
 
 #include <cmath>
+#include <tuple>
 
 #include "engine/core/error.hpp"
+#include "engine/io/image.hpp"
+#include "engine/io/image_size.hpp"
 
 namespace nf::io {
 
@@ -37,6 +40,29 @@ void Scene::validate(const std::string& source) const {
       for (int j = 0; j < 3; ++j)
         if (std::fabs(rrt[i][j] - (i == j ? 1.0 : 0.0)) > 1e-3)
           throw InputError(where + ": the pose's rotation is not orthonormal (scaled or sheared transform)");
+  }
+}
+
+void Scene::check_files(const std::string& source) const {
+  for (const Camera& c : cameras) {
+    const std::string where = source + ": camera '" + c.name + "'";
+    auto check = [&](const std::filesystem::path& file, const char* field) {
+      if (!std::filesystem::exists(file)) throw InputError(where + ": " + field + " " + file.string() + " does not exist");
+      const std::string ext = file.extension().string();
+      std::uint32_t w = 0, h = 0;
+      if (ext == ".exr" || ext == ".EXR") {
+        const Image image = read_image(file);
+        w = image.width, h = image.height;
+      } else {
+        std::tie(w, h) = image_size(file);
+      }
+      if (w != c.width || h != c.height)
+        throw InputError(where + ": " + field + " " + file.string() + " is " + std::to_string(w) + "x" + std::to_string(h) +
+                         " but the camera is " + std::to_string(c.width) + "x" + std::to_string(c.height));
+    };
+    if (c.image.empty()) throw InputError(where + ": no image path");
+    check(c.image, "image");
+    if (!c.mask.empty()) check(c.mask, "mask");
   }
 }
 

@@ -1,0 +1,27 @@
+#pragma once
+// Body regions of the method (DESIGN §5): the labels that carry fur length, thickness and growth
+// direction. Region ids are indices into kRegionNames and are what meshes store per vertex.
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace nf::body {
+
+enum class Region : std::int32_t {
+  leg_front, leg_rear, paw_pads, paws, front_paws, belly, neck, face, ears, inner_earcanal,
+  under_tail, eyes, tail, nosetip, body, mane,
+};
+inline constexpr int kRegionCount = 16;
+
+inline constexpr std::array<std::string_view, kRegionCount> kRegionNames = {
+    "leg_front", "leg_rear", "paw_pads", "paws", "front_paws", "belly", "neck", "face", "ears",
+    "inner_earcanal", "under_tail", "eyes", "tail", "nosetip", "body", "mane"};
+
+inline std::int32_t region_id(Region r) { return static_cast<std::int32_t>(r); }
+std::optional<Region> region_from_name(std::string_view name);
+// Throws InputError naming `source` when the id is outside the table.
+std::string region_name(std::int32_t id, const std::string& source = "region id");
+
+}  // namespace nf::body

@@ -1,0 +1,46 @@
+#pragma once
+// Per-region fur knowledge (DESIGN §5): length and effective thickness in cm and the growth
+// direction in the animal frame, for every region. Read from knowledge.json with every field
+// validated (errors name the file, the region and the field), written atomically, and available
+// as built-in presets for the animals the paper annotates (assets/knowledge/, embedded at build).
+#include <array>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "engine/body/regions.hpp"
+#include "engine/core/json.hpp"
+
+namespace nf::knowledge {
+
+struct RegionKnowledge {
+  float length_cm = 0, thickness_cm = 0;
+  glm::vec3 direction{0, -1, 0};  // unit, animal frame
+};
+
+struct Knowledge {
+  std::string animal;
+  std::string source;  // "preset:<name>", "vlm:<model>" or "file"
+  float eye_distance_cm = 0;
+  std::array<std::optional<RegionKnowledge>, body::kRegionCount> regions;
+
+  // The region's entry; throws InputError naming the region when the file lacks it.
+  const RegionKnowledge& at(body::Region r) const;
+  bool has(body::Region r) const { return regions[std::size_t(r)].has_value(); }
+  // Bald: no entry or zero length.
+  bool grows_fur(body::Region r) const { return has(r) && at(r).length_cm > 0; }
+};
+
+Knowledge knowledge_from_json(const json& j, const std::string& source);
+json knowledge_to_json(const Knowledge& k);
+Knowledge read_knowledge(const std::filesystem::path& path);
+void write_knowledge(const std::filesystem::path& path, const Knowledge& k);
+
+// Built-in presets: cat, dog, fox, panda, tiger, lion. Throws UsageError listing them.
+Knowledge preset(const std::string& animal);
+std::vector<std::string> preset_names();
+
+}  // namespace nf::knowledge

@@ -1,0 +1,55 @@
+#pragma once
+// The synthetic scenes' renderer: CPU ray tracing (Embree) of strands as round linear curves and of
+// the body as triangles, Kajiya-Kay hair shading, stratified supersampling for anti-aliasing. It
+// shares no code or maths with the engine's Gaussian strand splatting on purpose: images it makes
+// are the independent ground truth the splatter is judged against.
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "engine/io/image.hpp"
+#include "engine/io/mesh.hpp"
+#include "engine/io/scene.hpp"
+#include "engine/io/strands.hpp"
+
+namespace nf::synth {
+
+struct RenderOptions {
+  std::uint32_t samples_per_axis = 3;   // s x s stratified samples per pixel
+  glm::vec3 background{0.05f, 0.05f, 0.06f};  // linear RGB
+  std::uint32_t render_points = 34;     // points per strand traced (resampled from the strand's own)
+};
+
+struct StrandLook {
+  std::vector<glm::vec3> root_colors;   // linear RGB per strand (empty: grey)
+  float radius = 0.001f;                // scene units
+};
+
+struct BodyLook {
+  std::vector<glm::vec3> vertex_colors; // linear RGB per vertex (empty: grey)
+};
+
+struct Rendered {
+  io::Image rgb;       // sRGB-encoded, 3 channels
+  io::Image coverage;  // fraction of samples that hit the animal, 1 channel
+};
+
+class StrandRenderer {
+ public:
+  StrandRenderer(const io::Mesh& body, const BodyLook& body_look, const io::StrandSet& strands, const StrandLook& look,
+                 const RenderOptions& options);
+  ~StrandRenderer();
+  StrandRenderer(const StrandRenderer&) = delete;
+  StrandRenderer& operator=(const StrandRenderer&) = delete;
+
+  Rendered render(const io::Camera& camera) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace nf::synth

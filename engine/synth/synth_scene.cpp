@@ -1,0 +1,197 @@
+#include "engine/synth/synth_scene.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "engine/body/quadruped.hpp"
+#include "engine/core/atomic_file.hpp"
+#include "engine/core/error.hpp"
+#include "engine/core/log.hpp"
+#include "engine/core/progress.hpp"
+#include "engine/io/image.hpp"
+#include "engine/io/mesh.hpp"
+#include "engine/io/scene.hpp"
+#include "engine/io/strand_files.hpp"
+#include "engine/knowledge/knowledge.hpp"
+#include "engine/synth/camera_rig.hpp"
+#include "engine/synth/fur_envelope.hpp"
+#include "engine/synth/fur_growth.hpp"
+#include "engine/synth/strand_renderer.hpp"
+
+namespace nf::synth {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr float kCmPerUnit = 100.0f;  // synthetic scenes are in metres
+
+class Stopwatch {
+ public:
+  double lap() {
+    const auto now = std::chrono::steady_clock::now();
+    const double s = std::chrono::duration<double>(now - last_).count();
+    last_ = now;
+    return s;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
+
+json vec_json(glm::vec3 v) { return json::array({v.x, v.y, v.z}); }
+
+json mat_json(const glm::mat4& m) {
+  json rows = json::array();
+  for (int r = 0; r < 4; ++r) rows.push_back({m[0][r], m[1][r], m[2][r], m[3][r]});
+  return rows;
+}
+
+// The output folder must be new, or an earlier synth output when overwriting is allowed.
+void check_destination(const fs::path& out, bool overwrite) {
+  if (!fs::exists(out)) return;
+  if (!fs::is_directory(out)) throw UsageError(out.string() + " exists and is not a folder; choose another --out");
+  if (fs::is_empty(out)) return;
+  const bool ours = fs::exists(out / "gt" / "scene.json") && fs::exists(out / "transforms.json");
+  if (!ours) throw UsageError(out.string() + " exists and is not an nf_gpu synth scene; nothing was written (choose another --out)");
+  if (!overwrite) throw UsageError(out.string() + " already holds a synth scene; pass --overwrite to replace it");
+}
+
+}  // namespace
+
+json synthesize_scene(const fs::path& out_dir, const SynthOptions& o) {
+  if (o.views == 0 || o.resolution < 8 || o.resolution > 8192) throw UsageError("synth: --views must be >= 1 and --res in [8, 8192]");
+  if (o.strands == 0) throw UsageError("synth: --strands must be >= 1");
+  check_destination(out_dir, o.overwrite);
+  const fs::path out = out_dir.parent_path() / (out_dir.filename().string() + ".partial");
+  fs::remove_all(out);
+  fs::create_directories(out / "images");
+  fs::create_directories(out / "masks");
+  fs::create_directories(out / "gt");
+  Stopwatch clock;
+  json timings;
+
+  // Body: the family's proportions for the animal, varied by the seed, posed mildly.
+  const body::QuadrupedProportions proportions = body::vary_proportions(body::animal_proportions(o.animal), o.seed);
+  const body::BodyModel model = body::build_quadruped(proportions, {o.body_voxel});
+  body::BodyParams params = body::random_pose(model, o.seed);
+  std::mt19937 rng(o.seed + 101);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  // A yaw and an offset so the world frame differs from the animal frame.
+  params.animal_to_world = glm::translate(glm::mat4(1.0f), 0.1f * proportions.torso_length * glm::vec3(u(rng), 0, u(rng))) *
+                           glm::rotate(glm::mat4(1.0f), 3.14159265f * u(rng), glm::vec3(0, 1, 0));
+  const io::Mesh bald = body::pose_body(model, params);
+  const body::EyeCentres eyes = body::eye_centres(model, params);
+  timings["body_s"] = clock.lap();
+  log::write(log::Level::Info, "synth: " + o.animal + " body, " + std::to_string(bald.vertex_count()) + " vertices");
+
+  // Fur from the animal's knowledge preset; the ground-truth knowledge carries the true eye distance.
+  knowledge::Knowledge know = knowledge::preset(o.animal);
+  know.eye_distance_cm = eyes.distance() * kCmPerUnit;
+  const FurStyle style = fur_style(o.animal);
+  GrowOptions grow;
+  grow.strand_count = o.strands, grow.points_per_strand = o.points_per_strand, grow.seed = o.seed;
+  grow.cm_per_unit = kCmPerUnit, grow.animal_to_world = params.animal_to_world;
+  grow.animal = o.animal, grow.torso_length = proportions.torso_length;
+  Fur fur = grow_fur(bald, know, style, grow);
+  timings["fur_s"] = clock.lap();
+
+  const Envelope envelope = fur_envelope(bald, fur.strands);
+  timings["envelope_s"] = clock.lap();
+
+  // Cameras on two rings around the envelope's bounding sphere.
+  glm::vec3 lo(1e30f), hi(-1e30f);
+  for (std::size_t i = 0; i < envelope.mesh.vertex_count(); ++i) {
+    const glm::vec3 p(envelope.mesh.positions[3 * i], envelope.mesh.positions[3 * i + 1], envelope.mesh.positions[3 * i + 2]);
+    lo = glm::min(lo, p), hi = glm::max(hi, p);
+  }
+  const glm::vec3 centre = 0.5f * (lo + hi);
+  float radius = 0;
+  for (std::size_t i = 0; i < envelope.mesh.vertex_count(); ++i)
+    radius = std::max(radius, glm::distance(centre, glm::vec3(envelope.mesh.positions[3 * i], envelope.mesh.positions[3 * i + 1],
+                                                              envelope.mesh.positions[3 * i + 2])));
+  RigOptions rig;
+  rig.views = o.views, rig.width = rig.height = o.resolution;
+  const glm::vec3 up = glm::normalize(glm::vec3(params.animal_to_world * glm::vec4(0, 1, 0, 0)));
+  io::Scene scene;
+  scene.root = out;
+  scene.cm_per_unit = kCmPerUnit;
+  scene.cameras = camera_rings(centre, radius, up, rig);
+
+  // Render.
+  BodyLook body_look;
+  for (std::int32_t r : bald.regions) body_look.vertex_colors.push_back(skin_color(o.animal, static_cast<body::Region>(r)));
+  StrandLook look;
+  look.root_colors = fur.root_colors;
+  look.radius = style.strand_radius_fraction * proportions.torso_length;
+  RenderOptions render_options;
+  render_options.samples_per_axis = o.samples_per_axis;
+  const StrandRenderer renderer(bald, body_look, fur.strands, look, render_options);
+  timings["render_setup_s"] = clock.lap();
+  Progress progress("synth render", scene.cameras.size());
+  double coverage_sum = 0;
+  for (std::size_t i = 0; i < scene.cameras.size(); ++i) {
+    io::Camera& cam = scene.cameras[i];
+    const Rendered r = renderer.render(cam);
+    cam.image = out / "images" / (cam.name + ".png");
+    cam.mask = out / "masks" / (cam.name + ".png");
+    io::Image mask{r.coverage.width, r.coverage.height, 1, std::vector<float>(r.coverage.pixels.size())};
+    for (std::size_t p = 0; p < mask.pixels.size(); ++p) mask.pixels[p] = r.coverage.pixels[p] >= 0.5f ? 1.0f : 0.0f;
+    for (float c : mask.pixels) coverage_sum += c;
+    io::write_png(cam.image, r.rgb);
+    io::write_png(cam.mask, mask);
+    progress.update(i + 1);
+  }
+  progress.finish();
+  timings["render_s"] = clock.lap();
+
+  // Ground truth and cameras.
+  io::write_transforms_json(out / "transforms.json", scene);
+  io::write_hair(out / "gt" / "strands.hair", fur.strands);
+  io::write_mesh(out / "gt" / "bald.ply", bald);
+  io::write_mesh(out / "gt" / "body.glb", bald);
+  io::write_mesh(out / "gt" / "outer.ply", envelope.mesh);
+  knowledge::write_knowledge(out / "gt" / "knowledge.json", know);
+  json region_names = json::array();
+  for (auto name : body::kRegionNames) region_names.push_back(std::string(name));
+  json shape = json::object();
+  for (std::size_t s = 0; s < model.shape_count(); ++s) shape[model.shape_names[s]] = s < params.shape.size() ? params.shape[s] : 0.0f;
+  json rotations = json::object();
+  for (std::size_t j = 0; j < model.joint_count(); ++j) rotations[model.joint_names[j]] = vec_json(params.joint_rotations[j]);
+  json info{
+      {"generator", "nf_gpu synth"},
+      {"animal", o.animal},
+      {"seed", o.seed},
+      {"cm_per_unit", kCmPerUnit},
+      {"eye_centres", {{"left", vec_json(eyes.left)}, {"right", vec_json(eyes.right)}}},
+      {"eye_distance_cm", know.eye_distance_cm},
+      {"animal_to_world", mat_json(params.animal_to_world)},
+      {"region_names", region_names},
+      {"strands", {{"count", fur.strands.strand_count()}, {"points_per_strand", o.points_per_strand},
+                   {"render_radius", look.radius}}},
+      {"body", {{"model", model.name}, {"vertices", bald.vertex_count()}, {"triangles", bald.triangle_count()},
+                {"shape", shape}, {"joint_rotations", rotations}, {"torso_length", proportions.torso_length}}},
+      {"outer", {{"method", "morphological closing of body + strands, then marching cubes"},
+                 {"voxel", envelope.voxel}, {"closing_radius", envelope.closing_radius},
+                 {"vertices", envelope.mesh.vertex_count()}}},
+      {"render", {{"views", o.views}, {"resolution", o.resolution}, {"samples_per_pixel", o.samples_per_axis * o.samples_per_axis},
+                  {"mean_mask_coverage", coverage_sum / (double(o.views) * o.resolution * o.resolution)}}},
+  };
+  timings["write_s"] = clock.lap();
+  double total = 0;
+  for (const auto& [k, v] : timings.items()) total += v.get<double>();
+  timings["total_s"] = total;
+  info["timings"] = timings;
+  write_file_atomic(out / "gt" / "scene.json", info.dump(2) + "\n");
+
+  // Publish: the finished folder replaces an earlier synth output in one rename.
+  if (fs::exists(out_dir)) fs::remove_all(out_dir);
+  fs::rename(out, out_dir);
+  return info;
+}
+
+}  // namespace nf::synth

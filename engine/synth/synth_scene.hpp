@@ -1,0 +1,31 @@
+#pragma once
+// `nf_gpu synth`: a procedural furry quadruped with ground truth, rendered from two camera rings.
+// Writes, into a new folder (atomically: a temp folder renamed at the end):
+//   transforms.json, images/NNN.png, masks/NNN.png (body + fur coverage >= 1/2),
+//   gt/strands.hair (scene units = metres), gt/bald.ply (region per vertex), gt/outer.ply (the fur
+//   envelope, see fur_envelope.hpp), gt/knowledge.json, gt/scene.json (cm per unit, eye centres,
+//   body parameters, how outer.ply was made, timings), gt/body.glb (the bald body, for viewing).
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include "engine/core/json.hpp"
+
+namespace nf::synth {
+
+struct SynthOptions {
+  std::string animal = "cat";
+  std::uint32_t views = 36, resolution = 512;
+  unsigned seed = 1;
+  std::uint32_t strands = 100000;
+  std::uint32_t points_per_strand = 100;
+  std::uint32_t samples_per_axis = 3;  // anti-aliasing: s x s samples per pixel
+  float body_voxel = 0;                // metres; 0: the body model's default
+  bool overwrite = false;              // replace an existing synth output folder
+};
+
+// Returns the gt/scene.json content. Refuses (UsageError) to write into an existing folder unless
+// it is an earlier synth output and `overwrite` is set; user files are never replaced.
+json synthesize_scene(const std::filesystem::path& out, const SynthOptions& options);
+
+}  // namespace nf::synth

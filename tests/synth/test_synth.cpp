@@ -1,0 +1,253 @@
+// Synthetic scenes: fur grown as the knowledge says, an independent renderer whose coverage matches
+// analytic areas, and a written scene whose ground-truth strand roots project into the masks through
+// every camera reader (transforms.json, and NeuS / Artemis / COLMAP files written from the same
+// cameras).
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "engine/body/quadruped.hpp"
+#include "engine/core/error.hpp"
+#include "engine/geometry/marching_cubes.hpp"
+#include "engine/geometry/mesh_tools.hpp"
+#include "engine/geometry/point_index.hpp"
+#include "engine/io/image.hpp"
+#include "engine/io/mesh.hpp"
+#include "engine/io/scene.hpp"
+#include "engine/io/strand_files.hpp"
+#include "engine/knowledge/knowledge.hpp"
+#include "engine/synth/fur_growth.hpp"
+#include "engine/synth/strand_renderer.hpp"
+#include "engine/synth/synth_scene.hpp"
+#include "tests/support/scene_fixtures.hpp"
+
+using namespace nf;
+namespace fs = std::filesystem;
+using body::Region;
+
+namespace {
+
+glm::vec3 at(const std::vector<float>& xyz, std::size_t i) { return {xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]}; }
+
+// The fraction of points whose pixel is inside the camera's mask.
+double fraction_in_masks(const io::Scene& scene, const std::vector<glm::vec3>& points) {
+  std::uint64_t inside = 0, total = 0;
+  for (const io::Camera& cam : scene.cameras) {
+    REQUIRE(!cam.mask.empty());
+    const io::Image mask_image = io::read_image(cam.mask);
+    const auto mask = io::mask_of(mask_image);
+    for (const glm::vec3& p : points) {
+      const glm::dvec3 uvd = cam.project(glm::dvec3(p));
+      ++total;
+      if (uvd.z <= 0) continue;  // behind the camera: not in the mask
+      const double u = std::floor(uvd.x), v = std::floor(uvd.y);
+      if (u < 0 || v < 0 || u >= cam.width || v >= cam.height) continue;
+      inside += mask[std::size_t(v) * cam.width + std::size_t(u)];
+    }
+  }
+  REQUIRE(total > 0);
+  return double(inside) / double(total);
+}
+
+}  // namespace
+
+TEST_CASE("fur grows as the knowledge says: lengths per region, nothing on bald regions, outside the skin") {
+  const auto p = body::animal_proportions("fox");
+  const body::BodyModel model = body::build_quadruped(p, {p.torso_length / 70});
+  const io::Mesh skin = body::pose_body(model, {});
+  const knowledge::Knowledge know = knowledge::preset("fox");
+  synth::GrowOptions o;
+  o.strand_count = 20000, o.points_per_strand = 32, o.seed = 3, o.animal = "fox", o.torso_length = p.torso_length;
+  const synth::Fur fur = synth::grow_fur(skin, know, synth::fur_style("fox"), o);
+  REQUIRE(fur.strands.strand_count() == 20000);
+  CHECK_NOTHROW(fur.strands.validate("fur"));
+
+  std::map<int, std::pair<double, int>> lengths;
+  const geometry::PointIndex skin_index(skin.positions);
+  std::uint64_t below = 0, points = 0;
+  double root_gap = 0, along = 0;
+  int along_count = 0;
+  for (std::uint32_t s = 0; s < fur.strands.strand_count(); ++s) {
+    const Region region = static_cast<Region>(fur.strands.regions[s]);
+    REQUIRE(know.grows_fur(region));
+    double len = 0;
+    const std::uint32_t first = fur.strands.offsets[s];
+    for (std::uint32_t k = first + 1; k < fur.strands.offsets[s + 1]; ++k) {
+      const glm::vec3 q = at(fur.strands.points, k);
+      len += glm::distance(q, at(fur.strands.points, k - 1));
+      const auto [i, d2] = skin_index.nearest(&fur.strands.points[3 * k]);
+      (void)d2;
+      const glm::vec3 n = at(skin.normals, i);
+      below += glm::dot(q - at(skin.positions, i), n) < -0.002f * p.torso_length;
+      ++points;
+    }
+    lengths[int(region)].first += len, ++lengths[int(region)].second;
+    root_gap = std::max(root_gap, double(std::sqrt(skin_index.nearest(&fur.strands.points[3 * first]).second)));
+    if (region == Region::body) {  // the first segment follows the growth direction in the tangent plane
+      const glm::vec3 d = glm::normalize(at(fur.strands.points, first + 1) - at(fur.strands.points, first));
+      const glm::vec3 n = fur.root_normals[s];
+      const glm::vec3 g = know.at(region).direction;
+      const glm::vec3 gt = g - glm::dot(g, n) * n, dt = d - glm::dot(d, n) * n;
+      if (glm::length(gt) > 0.3f) along += glm::dot(glm::normalize(dt), glm::normalize(gt)), ++along_count;
+    }
+  }
+  for (const auto& [region, sum] : lengths) {
+    CAPTURE(body::kRegionNames[std::size_t(region)]);
+    const double expected = know.at(static_cast<Region>(region)).length_cm / 100.0;
+    if (sum.second > 50) CHECK(sum.first / sum.second == doctest::Approx(expected).epsilon(0.05));
+  }
+  CHECK(lengths.count(int(Region::eyes)) == 0);
+  CHECK(lengths.count(int(Region::nosetip)) == 0);
+  CHECK(lengths.count(int(Region::tail)) == 1);
+  CHECK(double(below) / double(points) < 0.01);
+  CHECK(root_gap < p.torso_length / 70);  // roots lie on the skin (within a voxel of a vertex)
+  REQUIRE(along_count > 100);
+  CHECK(along / along_count > 0.8);
+}
+
+TEST_CASE("the renderer's coverage matches analytic areas") {
+  io::Camera cam;
+  cam.name = "front";
+  cam.width = cam.height = 200;
+  cam.fx = cam.fy = 400, cam.cx = cam.cy = 100;
+  cam.camera_to_world = glm::translate(glm::dmat4(1.0), glm::dvec3(0, 0, 2));  // looks down -z at the origin
+
+  // A sphere of radius 0.25 at the origin: its silhouette is a disc of radius f r / sqrt(d^2 - r^2).
+  const int n = 64;
+  std::vector<float> field(std::size_t(n) * n * n);
+  const float voxel = 0.7f / (n - 1);
+  for (int z = 0; z < n; ++z)
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x)
+        field[(std::size_t(z) * n + y) * n + x] = glm::length(glm::vec3(x, y, z) * voxel - 0.35f) - 0.25f;
+  io::Mesh sphere = geometry::marching_cubes(field.data(), glm::ivec3(n), glm::vec3(0), glm::vec3(voxel), 0.0f);
+  for (std::size_t i = 0; i < sphere.positions.size(); ++i) sphere.positions[i] -= 0.35f;
+  geometry::compute_vertex_normals(sphere);
+  synth::RenderOptions options;
+  options.samples_per_axis = 4;
+  {
+    const synth::StrandRenderer renderer(sphere, {}, io::StrandSet{}, {}, options);
+    const synth::Rendered r = renderer.render(cam);
+    double covered = 0;
+    for (float c : r.coverage.pixels) covered += c;
+    const double radius_px = 400 * 0.25 / std::sqrt(4 - 0.0625);
+    CHECK(covered == doctest::Approx(3.14159265 * radius_px * radius_px).epsilon(0.02));
+  }
+  // One straight strand across the view, the sphere moved out of it: covers 2 r x length (pixels).
+  io::Mesh far_away = sphere;
+  for (std::size_t i = 0; i < far_away.positions.size(); i += 3) far_away.positions[i] += 50.0f;
+  std::vector<float> xyz;
+  for (int k = 0; k < 100; ++k) xyz.insert(xyz.end(), {-0.1f + 0.2f * k / 99.0f, 0.02f, 0.0f});
+  const io::StrandSet strand = io::StrandSet::uniform(1, 100, xyz);
+  synth::StrandLook look;
+  look.radius = 0.004f;  // 1.6 px wide
+  const synth::StrandRenderer renderer(far_away, {}, strand, look, options);
+  const synth::Rendered r = renderer.render(cam);
+  double covered = 0;
+  for (float c : r.coverage.pixels) covered += c;
+  const double length_px = 0.2 * 400 / 2, width_px = 2 * 0.004 * 400 / 2;
+  CHECK(covered == doctest::Approx(length_px * width_px + 3.14159265 * width_px * width_px / 4).epsilon(0.05));
+}
+
+TEST_CASE("a written synthetic scene: files, ground truth, and roots inside the masks through every camera reader") {
+  const fs::path root = fs::temp_directory_path() / "nf_synth_test";
+  fs::remove_all(root);
+  fs::create_directories(root);
+  const fs::path out = root / "cat";
+  synth::SynthOptions o;
+  o.animal = "cat", o.views = 6, o.resolution = 192, o.seed = 5, o.strands = 50000, o.samples_per_axis = 2;
+  o.body_voxel = 0.004f;
+
+  SUBCASE("a folder that is not a synth scene is never touched") {
+    fs::create_directories(out);
+    std::ofstream(out / "my_notes.txt") << "mine";
+    CHECK_THROWS_WITH_AS(synth::synthesize_scene(out, o), doctest::Contains("is not an nf_gpu synth scene"), UsageError);
+    CHECK(fs::exists(out / "my_notes.txt"));
+    CHECK(!fs::exists(out / "transforms.json"));
+  }
+
+  SUBCASE("outputs") {
+    const json info = synth::synthesize_scene(out, o);
+    for (const char* f : {"transforms.json", "gt/strands.hair", "gt/bald.ply", "gt/outer.ply", "gt/knowledge.json",
+                          "gt/scene.json", "gt/body.glb", "images/000.png", "masks/005.png"})
+      CHECK(fs::exists(out / f));
+    CHECK(!fs::exists(root / "cat.partial"));
+    CHECK_THROWS_WITH_AS(synth::synthesize_scene(out, o), doctest::Contains("--overwrite"), UsageError);
+
+    const io::Scene scene = io::read_scene(out);
+    REQUIRE(scene.cameras.size() == 6);
+    CHECK_NOTHROW(scene.check_files("transforms.json"));
+    CHECK(scene.cm_per_unit.value() == 100.0);
+    const io::StrandSet strands = io::read_hair(out / "gt" / "strands.hair");
+    CHECK(strands.strand_count() == 50000);
+    CHECK(strands.points_in(0) == 100);
+    const io::Mesh bald = io::read_mesh(out / "gt" / "bald.ply");
+    CHECK(bald.regions.size() == bald.vertex_count());
+    CHECK(io::read_mesh(out / "gt" / "body.glb").vertex_count() == bald.vertex_count());
+    const io::Mesh outer = io::read_mesh(out / "gt" / "outer.ply");
+    CHECK(geometry::is_closed_manifold(outer));
+    const knowledge::Knowledge k = knowledge::read_knowledge(out / "gt" / "knowledge.json");
+    const glm::vec3 left(info["eye_centres"]["left"][0], info["eye_centres"]["left"][1], info["eye_centres"]["left"][2]);
+    const glm::vec3 right(info["eye_centres"]["right"][0], info["eye_centres"]["right"][1], info["eye_centres"]["right"][2]);
+    CHECK(k.eye_distance_cm == doctest::Approx(100 * glm::distance(left, right)).epsilon(1e-4));
+
+    // The envelope holds the fur: strand tips lie within the closing radius (plus a voxel) of it or inside.
+    std::vector<glm::vec3> roots;
+    for (std::uint32_t s = 0; s < strands.strand_count(); ++s) roots.push_back(at(strands.points, strands.offsets[s]));
+    const geometry::PointIndex outer_index(outer.positions);
+    const float slack = info["outer"]["closing_radius"].get<float>() + 2 * info["outer"]["voxel"].get<float>();
+    int outside = 0;
+    for (std::uint32_t s = 0; s < strands.strand_count(); ++s) {
+      const std::uint32_t tip = strands.offsets[s + 1] - 1;
+      const auto [i, d2] = outer_index.nearest(&strands.points[3 * tip]);
+      const glm::vec3 q = at(strands.points, tip);
+      outside += glm::dot(q - at(outer.positions, i), at(outer.normals, i)) > slack;
+    }
+    CHECK(outside < int(strands.strand_count() / 100));
+
+    // Roots project into the masks through transforms.json ...
+    CHECK(fraction_in_masks(scene, roots) >= 0.99);
+    // ... and through NeuS, Artemis and COLMAP files written from the same cameras.
+    const fs::path neus = root / "neus", artemis = root / "artemis", colmap = root / "colmap";
+    fs::create_directories(neus / "image");
+    fs::create_directories(neus / "mask");
+    fs::create_directories(artemis);
+    fs::create_directories(colmap / "masks");
+    test::write_neus_cameras(neus, scene.cameras);
+    test::write_artemis_cameras(artemis, scene.cameras);
+    test::write_colmap_cameras(colmap, scene.cameras);
+    for (std::size_t i = 0; i < scene.cameras.size(); ++i) {
+      const io::Camera& c = scene.cameras[i];
+      fs::copy_file(c.image, neus / "image" / (c.name + ".png"));
+      fs::copy_file(c.mask, neus / "mask" / (c.name + ".png"));
+      test::write_jpeg_header(artemis / (test::artemis_name(i) + ".jpg"), c.width, c.height);
+      fs::copy_file(c.mask, artemis / (test::artemis_name(i) + "_alpha.png"));
+      fs::copy_file(c.mask, colmap / "masks" / (c.name + ".png"));
+    }
+    for (const fs::path& folder : {neus, artemis, colmap}) {
+      CAPTURE(folder);
+      const io::Scene other = io::read_scene(folder);
+      REQUIRE(other.cameras.size() == scene.cameras.size());
+      CHECK(fraction_in_masks(other, roots) >= 0.99);
+    }
+    // The check can fail: a classic mistake (world-to-camera rotation used as camera-to-world)
+    // sends the roots out of the masks.
+    io::Scene wrong = scene;
+    for (auto& c : wrong.cameras) {
+      const glm::dmat3 r = glm::transpose(glm::dmat3(c.camera_to_world));
+      for (int col = 0; col < 3; ++col) c.camera_to_world[col] = glm::dvec4(r[col], 0.0);
+    }
+    CHECK(fraction_in_masks(wrong, roots) < 0.5);
+
+    // Overwriting an earlier synth scene is allowed when asked.
+    o.overwrite = true, o.views = 2;
+    synth::synthesize_scene(out, o);
+    CHECK(io::read_scene(out).cameras.size() == 2);
+  }
+  fs::remove_all(root);
+}
