@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <future>
 #include <numeric>
 #include <random>
 
 #include "engine/core/error.hpp"
+#include "engine/geometry/feature_index.hpp"
 #include "engine/geometry/point_index.hpp"
 
 namespace nf::metrics {
@@ -39,34 +41,60 @@ std::vector<float> point_directions(const StrandSample& s) {
   return dirs;
 }
 
-// Per threshold: how many points of `from` have a matching nearest point in `to` (directed and not).
+// Per threshold: how many points of `from` have a point of `to` within the distance whose segment
+// direction is within the angle (directed and undirected), as the reference evaluation does (a
+// ball query: any point in it may match). Candidates come from a ball in (position, w direction)
+// space with w = d / sqrt(2 - 2 cos angle): every match lies within sqrt(2) d there, while points
+// pointing elsewhere do not, so even a prediction with no matches is cheap to score. Candidates
+// are then checked exactly; a query stops at its first match.
 void count_matches(const StrandSample& from, const std::vector<float>& from_dirs, const StrandSample& to,
                    const std::vector<float>& to_dirs, const std::vector<MatchThreshold>& thresholds, double cm_per_unit,
                    std::vector<std::uint64_t>& directed, std::vector<std::uint64_t>& undirected) {
-  directed.assign(thresholds.size(), 0);
-  undirected.assign(thresholds.size(), 0);
+  const std::size_t nt = thresholds.size();
+  directed.assign(nt, 0);
+  undirected.assign(nt, 0);
   if (from.xyz.empty() || to.xyz.empty()) return;
-  const geometry::PointIndex index(to.xyz);
-  std::vector<std::atomic<std::uint64_t>> hits_d(thresholds.size()), hits_u(thresholds.size());
-  geometry::parallel_for(from.xyz.size() / 3, [&](std::size_t begin, std::size_t end) {
-    std::vector<std::uint64_t> local_d(thresholds.size(), 0), local_u(thresholds.size(), 0);
+  const std::size_t n_from = from.xyz.size() / 3, n_to = to.xyz.size() / 3;
+  // One tree for all thresholds: w from the first; each threshold gets the radius that keeps its
+  // matches inside, sqrt(d^2 + w^2 (2 - 2 cos angle)).
+  std::vector<double> dist(nt), cos_angle(nt);
+  std::vector<float> radius(nt);
+  for (std::size_t t = 0; t < nt; ++t)
+    dist[t] = thresholds[t].distance_cm / cm_per_unit, cos_angle[t] = std::cos(thresholds[t].angle_deg * kPi / 180.0);
+  const float w = float(dist[0] / std::sqrt(std::max(2.0 - 2.0 * cos_angle[0], 1e-12)));
+  for (std::size_t t = 0; t < nt; ++t)
+    radius[t] = float(std::sqrt(dist[t] * dist[t] + double(w) * w * (2.0 - 2.0 * cos_angle[t]))) * 1.0001f;
+  std::vector<float> features(n_to * 6);
+  for (std::size_t q = 0; q < n_to; ++q)
+    for (int c = 0; c < 3; ++c) features[6 * q + c] = to.xyz[3 * q + c], features[6 * q + 3 + c] = w * to_dirs[3 * q + c];
+  const geometry::FeatureIndex index(features, 6);
+  std::vector<std::atomic<std::uint64_t>> hits_d(nt), hits_u(nt);
+  geometry::parallel_for(n_from, [&](std::size_t begin, std::size_t end) {
+    std::vector<std::uint64_t> local_d(nt, 0), local_u(nt, 0);
     for (std::size_t p = begin; p < end; ++p) {
-      const auto [q, d2] = index.nearest(&from.xyz[3 * p]);
-      const double distance_cm = std::sqrt(double(d2)) * cm_per_unit;
-      const double c = std::clamp(double(from_dirs[3 * p]) * to_dirs[3 * q] + double(from_dirs[3 * p + 1]) * to_dirs[3 * q + 1] +
-                                      double(from_dirs[3 * p + 2]) * to_dirs[3 * q + 2],
-                                  -1.0, 1.0);
-      const double angle = std::acos(c) * 180.0 / kPi;
-      const double undirected_angle = std::min(angle, 180.0 - angle);
-      for (std::size_t t = 0; t < thresholds.size(); ++t) {
-        if (distance_cm > thresholds[t].distance_cm) continue;
-        local_d[t] += angle < thresholds[t].angle_deg;
-        local_u[t] += undirected_angle < thresholds[t].angle_deg;
+      const float* x = &from.xyz[3 * p];
+      const float* u = &from_dirs[3 * p];
+      // sign +1: the directed match; -1: the reversed direction, which the undirected score accepts.
+      auto search = [&](std::size_t t, float sign) {
+        const float query[6] = {x[0], x[1], x[2], sign * w * u[0], sign * w * u[1], sign * w * u[2]};
+        bool found = false;
+        index.visit_within(query, radius[t], [&](std::uint32_t q, float) {
+          const double dx = double(x[0]) - to.xyz[3 * q], dy = double(x[1]) - to.xyz[3 * q + 1], dz = double(x[2]) - to.xyz[3 * q + 2];
+          const double c = sign * (double(u[0]) * to_dirs[3 * q] + double(u[1]) * to_dirs[3 * q + 1] + double(u[2]) * to_dirs[3 * q + 2]);
+          found = dx * dx + dy * dy + dz * dz <= dist[t] * dist[t] && c > cos_angle[t];
+          return !found;
+        });
+        return found;
+      };
+      for (std::size_t t = 0; t < nt; ++t) {
+        const bool match_d = search(t, 1.0f);
+        local_d[t] += match_d;
+        local_u[t] += match_d || search(t, -1.0f);
       }
     }
-    for (std::size_t t = 0; t < thresholds.size(); ++t) hits_d[t] += local_d[t], hits_u[t] += local_u[t];
+    for (std::size_t t = 0; t < nt; ++t) hits_d[t] += local_d[t], hits_u[t] += local_u[t];
   });
-  for (std::size_t t = 0; t < thresholds.size(); ++t) directed[t] = hits_d[t], undirected[t] = hits_u[t];
+  for (std::size_t t = 0; t < nt; ++t) directed[t] = hits_d[t], undirected[t] = hits_u[t];
 }
 
 }  // namespace
@@ -115,8 +143,10 @@ std::vector<MatchScore> match_scores(const StrandSample& predicted, const Strand
   if (!(cm_per_unit > 0)) throw InputError("metrics: the scene scale (cm per unit) must be positive");
   const auto pred_dirs = point_directions(predicted), true_dirs = point_directions(truth);
   std::vector<std::uint64_t> p_d, p_u, r_d, r_u;
+  // Precision and recall each build a tree (single-threaded in nanoflann): run them side by side.
+  auto recall_counts = std::async(std::launch::async, [&] { count_matches(truth, true_dirs, predicted, pred_dirs, thresholds, cm_per_unit, r_d, r_u); });
   count_matches(predicted, pred_dirs, truth, true_dirs, thresholds, cm_per_unit, p_d, p_u);
-  count_matches(truth, true_dirs, predicted, pred_dirs, thresholds, cm_per_unit, r_d, r_u);
+  recall_counts.get();
   const double n_pred = double(predicted.xyz.size() / 3), n_true = double(truth.xyz.size() / 3);
   std::vector<MatchScore> scores;
   for (std::size_t t = 0; t < thresholds.size(); ++t)

@@ -33,8 +33,9 @@ struct MatchScore {
   double precision, recall, fscore;  // percent
 };
 
-// A point matches when the nearest point of the other set lies within the distance and their
-// segment directions differ by less than the angle (one nearest-neighbour query per point).
+// A point matches when some point of the other set lies within the distance and their segment
+// directions differ by less than the angle (a ball query per point, as the reference evaluation of
+// Gaussian Haircut does; it stops at the first match, so good predictions are fast).
 std::vector<MatchScore> match_scores(const StrandSample& predicted, const StrandSample& truth,
                                      const std::vector<MatchThreshold>& thresholds, double cm_per_unit);
 
