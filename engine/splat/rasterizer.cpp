@@ -1,0 +1,273 @@
+#include "engine/splat/rasterizer.hpp"
+
+#include <cmath>
+
+#include "engine/core/error.hpp"
+#include "engine/core/finite.hpp"
+#include "engine/gpu/context.hpp"
+#include "engine/gpu/kernel.hpp"
+#include "engine/gpu/radix_sort.hpp"
+#include "engine/gpu/scan.hpp"
+
+namespace nf::splat {
+namespace {
+
+// Twin of nf_splat_camera.glsl.
+struct ProjectPush {
+  float r0[4], r1[4], r2[4];
+  float fx, fy, cx, cy;
+  std::uint32_t width, height;
+  float near_plane, far_plane;
+  float k2, eps2, delta2;
+  float low_pass, orientation_guard;
+  std::uint32_t strands, points_per_strand;
+};
+static_assert(sizeof(ProjectPush) == 108);
+
+struct KeysPush {
+  std::uint32_t count, tiles_x, depth_bits;
+  float near_plane, far_plane;
+};
+struct RangesPush {
+  std::uint32_t count, depth_bits;
+};
+struct CompositePush {
+  std::uint32_t width, height, tiles_x, has_body;
+};
+struct GatherPush {
+  std::uint32_t strands, points_per_strand, accumulate;
+};
+
+ProjectPush project_push(const StrandShape& shape, const RasterCamera& c, const RasterParams& p) {
+  ProjectPush push{};
+  for (int i = 0; i < 4; ++i)
+    push.r0[i] = float(c.world_to_camera[i]), push.r1[i] = float(c.world_to_camera[4 + i]), push.r2[i] = float(c.world_to_camera[8 + i]);
+  push.fx = float(c.fx), push.fy = float(c.fy), push.cx = float(c.cx), push.cy = float(c.cy);
+  push.width = c.width, push.height = c.height;
+  push.near_plane = float(c.near), push.far_plane = float(c.far);
+  const SegmentGaussianTerms<float> t(p.gaussian);
+  push.k2 = t.k2, push.eps2 = t.eps2, push.delta2 = t.delta2;
+  push.low_pass = float(p.low_pass), push.orientation_guard = float(p.orientation_guard);
+  push.strands = shape.strands, push.points_per_strand = shape.points_per_strand;
+  return push;
+}
+
+template <class T>
+void ensure(gpu::Context& context, std::unique_ptr<gpu::Buffer<T>>& buffer, std::uint64_t count, const char* name) {
+  count = std::max<std::uint64_t>(count, 1);
+  if (!buffer || buffer->size() < count) buffer = std::make_unique<gpu::Buffer<T>>(context, count + count / 4, name);
+}
+
+}  // namespace
+
+void validate(const RasterCamera& c) {
+  if (c.width == 0 || c.height == 0 || c.width > 16384 || c.height > 16384)
+    throw InputError("raster camera: image size " + std::to_string(c.width) + "x" + std::to_string(c.height) + " is invalid");
+  for (double v : {c.fx, c.fy, c.cx, c.cy})
+    if (!std::isfinite(v)) throw InputError("raster camera: intrinsics are not finite");
+  if (!(c.fx > 0) || !(c.fy > 0)) throw InputError("raster camera: focal lengths must be positive");
+  if (!(c.near > 0) || !(c.far > c.near) || !std::isfinite(c.far))
+    throw InputError("raster camera: need 0 < near < far, got near " + std::to_string(c.near) + ", far " + std::to_string(c.far));
+  for (double v : c.world_to_camera)
+    if (!std::isfinite(v)) throw InputError("raster camera: the pose is not finite");
+}
+
+struct StrandRasterizer::Impl {
+  gpu::Context& context;
+  std::unique_ptr<gpu::Buffer<float>> proj, grad_proj, grad_segment, final_t, no_body;
+  std::unique_ptr<gpu::Buffer<std::uint32_t>> touched, offsets, total, rects, keys, values, ranges, last;
+  // State of the last forward, for the backward.
+  StrandShape shape;
+  RasterCamera camera;
+  RasterParams params;
+  gpu::BufferRange points, body;
+  std::uint64_t entries = 0;
+  bool has_body = false;
+  explicit Impl(gpu::Context& c) : context(c) {}
+};
+
+StrandRasterizer::StrandRasterizer(gpu::Context& context) : impl_(std::make_unique<Impl>(context)) {}
+StrandRasterizer::~StrandRasterizer() = default;
+std::uint64_t StrandRasterizer::tile_entries() const { return impl_->entries; }
+
+void StrandRasterizer::forward(const StrandShape& shape, gpu::BufferRange points, gpu::BufferRange confidence,
+                               const RasterCamera& camera, const RasterParams& params, gpu::BufferRange body_depth,
+                               gpu::BufferRange image) {
+  Impl& m = *impl_;
+  validate(shape, params.gaussian, points.size / 4);
+  validate(camera);
+  const std::uint64_t segments = shape.segments(), pixels = std::uint64_t(camera.width) * camera.height;
+  if (segments >= (1ull << 32)) throw InputError("strands: more than 2^32 segments in one view");
+  gpu::require_bytes(confidence, segments * 4, "segment confidence");
+  gpu::require_bytes(image, pixels * kChannels * 4, "raster image");
+  m.has_body = body_depth.buffer != nullptr;
+  if (m.has_body) gpu::require_bytes(body_depth, pixels * 4, "body depth map");
+  m.shape = shape, m.camera = camera, m.params = params, m.points = points;
+  gpu::Context& ctx = m.context;
+  ensure(ctx, m.proj, segments * kProjected, "raster projected gaussians");
+  ensure(ctx, m.touched, segments, "raster tiles touched");
+  ensure(ctx, m.offsets, segments, "raster tile offsets");
+  ensure(ctx, m.total, 1, "raster tile total");
+  ensure(ctx, m.rects, segments * 2, "raster tile rectangles");
+  const std::uint32_t ntx = tiles_x(camera), nty = tiles_y(camera), tiles = ntx * nty;
+  ensure(ctx, m.ranges, std::uint64_t(tiles) * 2, "raster tile ranges");
+  ensure(ctx, m.final_t, pixels, "raster final transmittance");
+  ensure(ctx, m.last, pixels, "raster last contributor");
+  ensure(ctx, m.no_body, 1, "raster no body");
+  m.body = m.has_body ? body_depth : m.no_body->whole();
+
+  const ProjectPush push = project_push(shape, camera, params);
+  {
+    gpu::Stream stream(ctx);
+    {
+      gpu::ScopedPass pass(stream, "splat/rasterize_project");
+      stream.dispatch(ctx.kernel("splat/rasterize_project", {{0, 128}}),
+                      {points, confidence, m.proj->range(0, segments * kProjected), m.touched->range(0, segments),
+                       m.rects->range(0, segments * 2)},
+                      push, gpu::Elements(segments));
+    }
+    {
+      gpu::ScopedPass pass(stream, "splat/scan_tiles");
+      gpu::exclusive_scan(stream, m.touched->range(0, segments), m.offsets->range(0, segments), m.total->range(0, 1));
+    }
+    stream.submit_and_wait();
+  }
+  m.entries = m.total->download(0, 1)[0];
+  const std::uint32_t depth_b = depth_bits(camera);
+  gpu::Stream stream(ctx);
+  stream.fill(m.ranges->range(0, std::uint64_t(tiles) * 2), 0);
+  if (m.entries > 0) {
+    ensure(ctx, m.keys, m.entries, "raster keys");
+    ensure(ctx, m.values, m.entries, "raster values");
+    {
+      gpu::ScopedPass pass(stream, "splat/rasterize_keys");
+      const KeysPush kp{std::uint32_t(segments), ntx, depth_b, float(camera.near), float(camera.far)};
+      stream.dispatch(ctx.kernel("splat/rasterize_keys", {{0, 128}}),
+                      {m.proj->range(0, segments * kProjected), m.offsets->range(0, segments), m.rects->range(0, segments * 2),
+                       m.keys->range(0, m.entries), m.values->range(0, m.entries)},
+                      kp, gpu::Elements(segments));
+    }
+    {
+      gpu::ScopedPass pass(stream, "splat/sort");
+      gpu::radix_sort(stream, m.keys->range(0, m.entries), m.values->range(0, m.entries), 32);
+    }
+    {
+      gpu::ScopedPass pass(stream, "splat/rasterize_ranges");
+      const RangesPush rp{std::uint32_t(m.entries), depth_b};
+      stream.dispatch(ctx.kernel("splat/rasterize_ranges", {{0, 128}}),
+                      {m.keys->range(0, m.entries), m.ranges->range(0, std::uint64_t(tiles) * 2)}, rp, gpu::Elements(m.entries));
+    }
+  } else {
+    ensure(ctx, m.values, 1, "raster values");
+  }
+  {
+    gpu::ScopedPass pass(stream, "splat/rasterize_fwd");
+    const CompositePush cp{camera.width, camera.height, ntx, m.has_body ? 1u : 0u};
+    stream.dispatch(ctx.kernel("splat/rasterize_fwd", {{0, 256}}),
+                    {m.proj->range(0, segments * kProjected), m.values->range(0, std::max<std::uint64_t>(m.entries, 1)),
+                     m.ranges->range(0, std::uint64_t(tiles) * 2), m.body, image, m.final_t->range(0, pixels),
+                     m.last->range(0, pixels)},
+                    cp, gpu::Elements(std::uint64_t(tiles) * 256));
+  }
+  stream.submit_and_wait();
+}
+
+void StrandRasterizer::backward(gpu::Stream& stream, gpu::BufferRange grad_image, gpu::BufferRange grad_points,
+                                gpu::BufferRange grad_confidence, bool accumulate) {
+  Impl& m = *impl_;
+  const StrandShape& shape = m.shape;
+  const RasterCamera& camera = m.camera;
+  const std::uint64_t segments = shape.segments(), pixels = std::uint64_t(camera.width) * camera.height;
+  if (!m.proj) throw InternalError("strand rasterizer: backward before forward");
+  gpu::require_bytes(grad_image, pixels * kChannels * 4, "raster image gradient");
+  gpu::require_bytes(grad_points, shape.points() * 12, "strand point gradients");
+  gpu::require_bytes(grad_confidence, segments * 4, "segment confidence gradients");
+  gpu::Context& ctx = m.context;
+  ensure(ctx, m.grad_proj, segments * kProjected, "raster projected gradients");
+  ensure(ctx, m.grad_segment, segments * 6, "raster segment gradients");
+  const std::uint32_t ntx = tiles_x(camera), tiles = ntx * tiles_y(camera);
+  stream.fill(m.grad_proj->range(0, segments * kProjected), 0);
+  {
+    gpu::ScopedPass pass(stream, "splat/rasterize_bwd");
+    const CompositePush cp{camera.width, camera.height, ntx, m.has_body ? 1u : 0u};
+    stream.dispatch(ctx.kernel("splat/rasterize_bwd", {{0, 256}}),
+                    {m.proj->range(0, segments * kProjected), m.values->range(0, std::max<std::uint64_t>(m.entries, 1)),
+                     m.ranges->range(0, std::uint64_t(tiles) * 2), m.body, m.final_t->range(0, pixels),
+                     m.last->range(0, pixels), grad_image, m.grad_proj->range(0, segments * kProjected)},
+                    cp, gpu::Elements(std::uint64_t(tiles) * 256));
+  }
+  {
+    gpu::ScopedPass pass(stream, "splat/rasterize_project_bwd");
+    stream.dispatch(ctx.kernel("splat/rasterize_project_bwd", {{0, 128}}),
+                    {m.points, m.proj->range(0, segments * kProjected), m.grad_proj->range(0, segments * kProjected),
+                     m.grad_segment->range(0, segments * 6), grad_confidence},
+                    project_push(shape, camera, m.params), gpu::Elements(segments));
+  }
+  {
+    gpu::ScopedPass pass(stream, "splat/rasterize_gather");
+    const GatherPush gp{shape.strands, shape.points_per_strand, accumulate ? 1u : 0u};
+    stream.dispatch(ctx.kernel("splat/rasterize_gather", {{0, 128}}), {m.grad_segment->range(0, segments * 6), grad_points}, gp,
+                    gpu::Elements(shape.points()));
+  }
+}
+
+namespace {
+
+struct Uploaded {
+  gpu::Buffer<float> points, confidence;
+  std::unique_ptr<gpu::Buffer<float>> body;
+  gpu::Buffer<float> image;
+};
+
+Uploaded upload(gpu::Context& context, const StrandShape& shape, std::span<const float> points, std::span<const float> confidence,
+                const RasterCamera& camera, const RasterParams& params, std::span<const float> body_depth) {
+  validate(shape, params.gaussian, points.size());
+  validate(camera);
+  if (confidence.size() != shape.segments())
+    throw InputError("segment confidence: " + std::to_string(confidence.size()) + " values for " + std::to_string(shape.segments()) +
+                     " segments");
+  const std::uint64_t pixels = std::uint64_t(camera.width) * camera.height;
+  if (!body_depth.empty() && body_depth.size() != pixels)
+    throw InputError("body depth map: " + std::to_string(body_depth.size()) + " values for " + std::to_string(pixels) + " pixels");
+  require_finite(points, "strand points");
+  require_finite(confidence, "segment confidence");
+  Uploaded u{gpu::Buffer<float>(context, std::max<std::size_t>(points.size(), 1), "strand points"),
+             gpu::Buffer<float>(context, std::max<std::size_t>(confidence.size(), 1), "segment confidence"), nullptr,
+             gpu::Buffer<float>(context, pixels * kChannels, "raster image")};
+  if (!points.empty()) u.points.upload(points);
+  if (!confidence.empty()) u.confidence.upload(confidence);
+  if (!body_depth.empty()) u.body = std::make_unique<gpu::Buffer<float>>(context, body_depth, "body depth map");
+  return u;
+}
+
+}  // namespace
+
+std::vector<float> rasterize(gpu::Context& context, const StrandShape& shape, std::span<const float> points,
+                             std::span<const float> confidence, const RasterCamera& camera, const RasterParams& params,
+                             std::span<const float> body_depth) {
+  Uploaded u = upload(context, shape, points, confidence, camera, params, body_depth);
+  StrandRasterizer raster(context);
+  raster.forward(shape, u.points, u.confidence, camera, params, u.body ? u.body->whole() : gpu::BufferRange{}, u.image);
+  return u.image.download();
+}
+
+RasterGradients rasterize_backward(gpu::Context& context, const StrandShape& shape, std::span<const float> points,
+                                   std::span<const float> confidence, const RasterCamera& camera,
+                                   const RasterParams& params, std::span<const float> body_depth,
+                                   std::span<const float> grad_image) {
+  const std::uint64_t pixels = std::uint64_t(camera.width) * camera.height;
+  if (grad_image.size() != pixels * kChannels) throw InputError("raster image gradient: size does not match the image");
+  require_finite(grad_image, "raster image gradient");
+  Uploaded u = upload(context, shape, points, confidence, camera, params, body_depth);
+  StrandRasterizer raster(context);
+  raster.forward(shape, u.points, u.confidence, camera, params, u.body ? u.body->whole() : gpu::BufferRange{}, u.image);
+  gpu::Buffer<float> g_image(context, grad_image, "raster image gradient");
+  gpu::Buffer<float> g_points(context, std::max<std::uint64_t>(shape.points() * 3, 1), "strand point gradients");
+  gpu::Buffer<float> g_conf(context, std::max<std::uint64_t>(shape.segments(), 1), "segment confidence gradients");
+  gpu::Stream stream(context);
+  raster.backward(stream, g_image, g_points, g_conf, false);
+  stream.submit_and_wait();
+  return {g_points.download(0, shape.points() * 3), g_conf.download(0, shape.segments())};
+}
+
+}  // namespace nf::splat

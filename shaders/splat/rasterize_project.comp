@@ -1,0 +1,43 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// Strand rasterisation, pass 1: every segment becomes a screen-space Gaussian (12 floats, see
+// nf_splat_project.glsl) and counts the 16x16 tiles its 3.5-sigma square touches. One invocation
+// per segment. Host: engine/splat/rasterizer.cpp.
+
+layout(constant_id = 0) const uint WG = 128;
+layout(local_size_x_id = 0) in;
+#include "nf_index.glsl"
+#include "nf_splat_camera.glsl"
+#include "nf_splat_project.glsl"
+
+layout(std430, binding = 0) readonly buffer Points { float points[]; };     // strands * L * 3
+layout(std430, binding = 1) readonly buffer Conf { float conf[]; };         // per segment
+layout(std430, binding = 2) writeonly buffer Proj { float proj[]; };        // per segment * 12
+layout(std430, binding = 3) writeonly buffer Touched { uint touched[]; };   // tiles per segment
+layout(std430, binding = 4) writeonly buffer Rects { uint rects[]; };       // x0 | y0 << 16, x1 | y1 << 16
+
+void main() {
+  const uint segs = pc.points_per_strand - 1u;
+  const uint g = nf_linear_index();
+  if (g >= pc.strands * segs) return;
+  const uint strand = g / segs, l = g - strand * segs;
+  const uint i0 = (strand * pc.points_per_strand + l) * 3u;
+  const vec3 p0 = vec3(points[i0], points[i0 + 1u], points[i0 + 2u]);
+  const vec3 p1 = vec3(points[i0 + 3u], points[i0 + 4u], points[i0 + 5u]);
+  float o[12];
+  const bool valid = nf_project_segment(p0, p1, conf[g], o);
+  for (uint i = 0u; i < P_FLOATS; ++i) proj[g * P_FLOATS + i] = o[i];
+  uint count = 0u, r0 = 0u, r1 = 0u;
+  if (valid) {
+    const int ntx = int((pc.width + 15u) / 16u), nty = int((pc.height + 15u) / 16u);
+    const float r = o[P_RADIUS];
+    const int x0 = clamp(int(floor((o[P_U] - r) / 16.0)), 0, ntx - 1), x1 = clamp(int(floor((o[P_U] + r) / 16.0)), 0, ntx - 1);
+    const int y0 = clamp(int(floor((o[P_V] - r) / 16.0)), 0, nty - 1), y1 = clamp(int(floor((o[P_V] + r) / 16.0)), 0, nty - 1);
+    count = uint((x1 - x0 + 1) * (y1 - y0 + 1));
+    r0 = uint(x0) | (uint(y0) << 16);
+    r1 = uint(x1) | (uint(y1) << 16);
+  }
+  touched[g] = count;
+  rects[2u * g] = r0;
+  rects[2u * g + 1u] = r1;
+}
