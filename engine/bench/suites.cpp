@@ -2,16 +2,18 @@
 
 #include "engine/bench/core_suite.hpp"
 #include "engine/bench/nn_suite.hpp"
+#include "engine/bench/splat_suite.hpp"
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
 
 namespace nf::bench {
 
-std::vector<std::string> suite_names() { return {"core", "nn"}; }
+std::vector<std::string> suite_names() { return {"core", "nn", "splat"}; }
 
 json run_suite(gpu::Context& context, const Options& options) {
   if (options.suite == "core") return run_core_suite(context, options);
   if (options.suite == "nn") return run_nn_suite(context, options);
+  if (options.suite == "splat") return run_splat_suite(context, options);
   throw UsageError("unknown bench suite '" + options.suite + "'");
 }
 

@@ -4,6 +4,7 @@
 #include "engine/nn/loss_gradcheck.hpp"
 #include "engine/nn/mlp_gradcheck.hpp"
 #include "engine/splat/rasterizer_gradcheck.hpp"
+#include "engine/splat/image_losses_gradcheck.hpp"
 #include "engine/splat/segment_gaussian_gradcheck.hpp"
 
 namespace nf::gradcheck {
@@ -15,6 +16,7 @@ std::vector<std::unique_ptr<DifferentiableKernel>> all_kernels() {
   kernels.push_back(nn::make_hash_grid_check());
   kernels.push_back(nn::make_mse_loss_check());
   kernels.push_back(splat::make_segment_gaussian_check());
+  kernels.push_back(splat::make_image_losses_check());
   kernels.push_back(splat::make_rasterizer_check());
   return kernels;
 }

@@ -28,8 +28,10 @@ float nf_power(uint slot, vec2 q) {
 }
 
 // Opacity at a pixel: 0 below the cut-off, continuous above it (rasterizer_ref.hpp explains).
+const float POWER_MIN = -5.5413;  // ln(1/255): below it alpha < 1/255 whatever the opacity (<= 1)
+
 float nf_alpha(uint slot, float power) {
-  if (power > 0.0) return 0.0;
+  if (power > 0.0 || power < POWER_MIN) return 0.0;  // most pairs of a tile: skip the exp
   const float raw = min(ALPHA_MAX, s_mean_opacity[slot].z * exp(power));
   return raw < ALPHA_MIN ? 0.0 : (raw - ALPHA_MIN) / (1.0 - ALPHA_MIN);
 }

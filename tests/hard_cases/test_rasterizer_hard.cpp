@@ -1,0 +1,141 @@
+// Hard cases of the strand rasteriser (DESIGN §4, issue list): zero-length and edge-on segments,
+// segments behind the camera or crossing the near plane, strands off screen, more than 10,000
+// Gaussians in one tile, a 1x1 image, and an occluder in front of everything. Each must give finite
+// images and gradients that agree with the CPU reference.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <random>
+
+#include "engine/core/error.hpp"
+#include "engine/splat/rasterizer.hpp"
+#include "tests/support/gpu_test.hpp"
+
+using namespace nf;
+using namespace nf::splat;
+
+namespace {
+
+RasterCamera front_camera(std::uint32_t w, std::uint32_t h, double focal = 60) {
+  RasterCamera c;
+  c.width = w, c.height = h, c.fx = c.fy = focal, c.cx = 0.5 * w, c.cy = 0.5 * h;
+  c.world_to_camera[11] = -2;  // camera at z = 2 looking down -z
+  c.near = 0.05, c.far = 10;
+  return c;
+}
+
+RasterParams params(double width = 0.02) {
+  RasterParams p;
+  p.gaussian = {0.5, width};
+  return p;
+}
+
+double max_abs(const std::vector<float>& v) {
+  double m = 0;
+  for (float x : v) {
+    REQUIRE(std::isfinite(x));
+    m = std::max(m, double(std::fabs(x)));
+  }
+  return m;
+}
+
+// GPU forward and adjoint against the float reference: relative to the largest magnitude.
+void check_against_reference(gpu::Context& ctx, std::uint32_t strands, std::uint32_t L, const std::vector<float>& pts,
+                             const RasterCamera& cam, const RasterParams& rp, const std::vector<float>& body = {},
+                             double tolerance = 1e-4) {
+  const StrandShape shape{strands, L};
+  const std::vector<float> conf(shape.segments(), 0.7f);
+  const std::vector<float> image = rasterize(ctx, shape, pts, conf, cam, rp, body);
+  std::vector<float> ref;
+  rasterize_ref(pts, conf, strands, L, cam, rp, body, ref);
+  REQUIRE(image.size() == ref.size());
+  const double scale = std::max(1e-6, max_abs(ref));
+  for (std::size_t i = 0; i < ref.size(); ++i) REQUIRE(std::fabs(image[i] - ref[i]) <= tolerance * scale + 1e-6);
+  std::mt19937 rng(3);
+  std::normal_distribution<float> g(0.0f, 1.0f);
+  std::vector<float> grad_image(image.size());
+  for (float& x : grad_image) x = g(rng);
+  const RasterGradients got = rasterize_backward(ctx, shape, pts, conf, cam, rp, body, grad_image);
+  std::vector<float> want_points, want_conf;
+  rasterize_adjoint_ref(pts, conf, strands, L, cam, rp, body, grad_image, want_points, want_conf);
+  const double gscale = std::max(1e-6, max_abs(want_points));
+  max_abs(got.points);
+  for (std::size_t i = 0; i < want_points.size(); ++i) REQUIRE(std::fabs(got.points[i] - want_points[i]) <= 1e-3 * gscale + 1e-6);
+  for (std::size_t i = 0; i < want_conf.size(); ++i) REQUIRE(std::fabs(got.confidence[i] - want_conf[i]) <= 1e-3 * max_abs(want_conf) + 1e-6);
+}
+
+}  // namespace
+
+TEST_CASE("rasteriser hard cases agree with the reference and stay finite") {
+  gpu::Context& ctx = test::context();
+
+  SUBCASE("zero-length segments and a strand collapsed to a point") {
+    std::vector<float> pts = {0, 0, 0, 0, 0, 0, 0.1f, 0, 0, 0.1f, 0, 0,  // repeated points
+                              0.2f, 0.1f, 0, 0.2f, 0.1f, 0, 0.2f, 0.1f, 0, 0.2f, 0.1f, 0};  // all one point
+    check_against_reference(ctx, 2, 4, pts, front_camera(32, 32), params());
+  }
+  SUBCASE("segments seen exactly edge-on have no orientation, not a NaN") {
+    std::vector<float> pts = {0, 0, 0.3f, 0, 0, 0.1f, 0, 0, -0.1f, 0, 0, -0.3f};  // along the view axis through the centre
+    check_against_reference(ctx, 1, 4, pts, front_camera(32, 32), params());
+    const std::vector<float> image = rasterize(ctx, {1, 4}, pts, std::vector<float>(3, 1.0f), front_camera(32, 32), params());
+    const std::size_t plane = 32 * 32, centre = 16 * 32 + 16;
+    CHECK(image[centre] > 0.1f);                                   // the strand is seen ...
+    CHECK(std::fabs(image[plane + centre]) < 0.05f * image[centre]);  // ... with no orientation
+  }
+  SUBCASE("segments behind the camera and crossing the near plane") {
+    std::vector<float> pts;
+    for (int k = 0; k < 8; ++k) pts.insert(pts.end(), {0.05f * k, 0.02f, 3.0f - 0.6f * k});  // z from 3 (behind) to -1.2
+    check_against_reference(ctx, 1, 8, pts, front_camera(40, 30), params());
+  }
+  SUBCASE("strands entirely off screen give an empty image and zero gradients") {
+    std::vector<float> pts;
+    for (int k = 0; k < 5; ++k) pts.insert(pts.end(), {5.0f + 0.1f * k, 0, 0});
+    const std::vector<float> image = rasterize(ctx, {1, 5}, pts, std::vector<float>(4, 1.0f), front_camera(16, 16), params());
+    CHECK(max_abs(image) == 0.0);
+    check_against_reference(ctx, 1, 5, pts, front_camera(16, 16), params());
+  }
+  SUBCASE("a 1x1 image") {
+    std::vector<float> pts = {-0.1f, 0, 0, 0, 0.01f, 0, 0.1f, 0, 0};
+    check_against_reference(ctx, 1, 3, pts, front_camera(1, 1, 20), params(0.05));
+  }
+  SUBCASE("an occluder in front of everything hides all strands") {
+    std::vector<float> pts = {-0.1f, 0, 0, 0, 0.01f, 0, 0.1f, 0, 0};
+    const RasterCamera cam = front_camera(24, 24);
+    const std::vector<float> body(24 * 24, 1.0f);  // depth 1 < the strands' depth 2
+    const std::vector<float> image = rasterize(ctx, {1, 3}, pts, std::vector<float>(2, 1.0f), cam, params(), body);
+    CHECK(max_abs(image) == 0.0);
+    check_against_reference(ctx, 1, 3, pts, cam, params(), body);
+  }
+  SUBCASE("more than 10,000 Gaussians in one tile") {
+    const std::uint32_t strands = 180, L = 60;  // 10,620 segments inside one 16x16 tile
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    std::vector<float> pts;
+    for (std::uint32_t s = 0; s < strands; ++s) {
+      float p[3] = {0.03f * u(rng), 0.03f * u(rng), 0.2f * u(rng)};
+      for (std::uint32_t l = 0; l < L; ++l) {
+        pts.insert(pts.end(), p, p + 3);
+        for (float& x : p) x += 0.0008f * u(rng);
+      }
+    }
+    RasterCamera cam = front_camera(16, 16, 100);
+    check_against_reference(ctx, strands, L, pts, cam, params(0.002), {}, 2e-4);
+  }
+}
+
+TEST_CASE("bad raster inputs are refused with the field named") {
+  gpu::Context& ctx = test::context();
+  const std::vector<float> pts = {0, 0, 0, 0.1f, 0, 0};
+  RasterCamera cam = front_camera(8, 8);
+  cam.near = 0;
+  CHECK_THROWS_WITH_AS(rasterize(ctx, {1, 2}, pts, std::vector<float>(1, 1.0f), cam, params()), doctest::Contains("near"), InputError);
+  cam = front_camera(8, 8);
+  CHECK_THROWS_WITH_AS(rasterize(ctx, {1, 2}, pts, std::vector<float>(2, 1.0f), cam, params()), doctest::Contains("segment confidence"),
+                       InputError);
+  std::vector<float> bad = pts;
+  bad[4] = std::nanf("");
+  CHECK_THROWS_WITH_AS(rasterize(ctx, {1, 2}, bad, std::vector<float>(1, 1.0f), cam, params()), doctest::Contains("strand points"),
+                       InputError);
+  CHECK_THROWS_WITH_AS(rasterize(ctx, {1, 2}, pts, std::vector<float>(1, 1.0f), cam, params(), std::vector<float>(3, 1.0f)),
+                       doctest::Contains("body depth map"), InputError);
+}
