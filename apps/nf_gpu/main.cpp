@@ -14,6 +14,7 @@
 #include "engine/io/mesh.hpp"
 #include "engine/metrics/strand_metrics.hpp"
 #include "engine/metrics/surface_metrics.hpp"
+#include "engine/synth/preview.hpp"
 #include "engine/synth/synth_scene.hpp"
 
 namespace {
@@ -157,6 +158,13 @@ int run_synth(const std::string& out, const nf::synth::SynthOptions& options) {
   return 0;
 }
 
+int run_render(const nf::synth::PreviewOptions& options) {
+  const auto r = nf::synth::render_previews(options);
+  std::printf("render: %zu views -> %s (strand radius %.4g scene units, coloured by %s, %.1f s)\n", r.files.size(),
+              options.out.string().c_str(), r.strand_radius, r.coloring.c_str(), r.seconds);
+  return 0;
+}
+
 int run_bench(const nf::bench::Options& options, const std::string& json_path, bool profile) {
   nf::gpu::Context context;
   const json records = nf::bench::run_suite(context, options);
@@ -221,6 +229,17 @@ int main(int argc, char** argv) {
   synth->add_option("--out", synth_out, "output folder (must be new, or an earlier synth scene with --overwrite)")->required();
   synth->add_flag("--overwrite", synth_options.overwrite, "replace an earlier synth scene in --out");
 
+  nf::synth::PreviewOptions render_options;
+  std::string render_strands, render_mesh, render_scene, render_out;
+  auto* render = app.add_subcommand("render", "shaded previews of strands over the body, a colour per region (a PNG per view)");
+  render->add_option("--strands", render_strands, "strands (.hair, .ply, .obj, .usda)")->required();
+  render->add_option("--mesh", render_mesh, "body mesh (.ply, .obj, .glb, .gltf); its regions colour the strands")->required();
+  render->add_option("--scene", render_scene, "scene folder or transforms.json (any supported camera format)")->required();
+  render->add_option("--views", render_options.views, "'all' (default) or camera indices, e.g. 0,5,9");
+  render->add_option("--out", render_out, "output folder: <camera name>.png per view (created if needed)")->required();
+  render->add_option("--spp-axis", render_options.samples_per_axis, "anti-aliasing: s x s samples per pixel (default 3)")->check(CLI::Range(1, 16));
+  render->add_option("--width-scale", render_options.width_scale, "strand width factor (default 1: about one pixel at the animal)")->check(CLI::PositiveNumber);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -234,6 +253,11 @@ int main(int argc, char** argv) {
     if (*bench) return run_bench(bench_options, bench_json, profile);
     if (*metrics) return run_metrics(metrics_options);
     if (*synth) return run_synth(synth_out, synth_options);
+    if (*render) {
+      render_options.strands = render_strands, render_options.mesh = render_mesh;
+      render_options.scene = render_scene, render_options.out = render_out;
+      return run_render(render_options);
+    }
   } catch (const nf::Error& e) {
     std::cerr << "nf_gpu: error: " << e.what() << "\n";
     return int(e.code());

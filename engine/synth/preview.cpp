@@ -1,0 +1,185 @@
+#include "engine/synth/preview.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <map>
+
+#include "engine/core/error.hpp"
+#include "engine/core/log.hpp"
+#include "engine/core/progress.hpp"
+#include "engine/geometry/mesh_tools.hpp"
+#include "engine/geometry/point_index.hpp"
+#include "engine/io/image.hpp"
+#include "engine/io/mesh.hpp"
+#include "engine/io/scene.hpp"
+#include "engine/io/strand_files.hpp"
+#include "engine/synth/strand_renderer.hpp"
+
+namespace nf::synth {
+namespace fs = std::filesystem;
+
+namespace {
+
+float srgb_to_linear(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
+
+glm::vec3 linear(glm::vec3 srgb) { return {srgb_to_linear(srgb.r), srgb_to_linear(srgb.g), srgb_to_linear(srgb.b)}; }
+
+glm::vec3 palette_color(std::int64_t region) {
+  const auto& p = region_palette();
+  if (region < 0 || region >= std::int64_t(p.size())) return p[std::size_t(body::Region::body)];
+  return p[std::size_t(region)];
+}
+
+std::string file_safe(const std::string& name) {
+  std::string s = name.empty() ? std::string("camera") : name;
+  for (char& c : s)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '_')) c = '_';
+  if (s == "." || s == "..") s = "camera";
+  return s;
+}
+
+// 0.5 x the median over cameras of depth(animal centre) / focal length, in scene units.
+float default_radius(const io::Scene& scene, const io::Mesh& mesh) {
+  glm::dvec3 lo(1e300), hi(-1e300);
+  for (std::size_t i = 0; i < mesh.vertex_count(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      lo[c] = std::min(lo[c], double(mesh.positions[3 * i + c]));
+      hi[c] = std::max(hi[c], double(mesh.positions[3 * i + c]));
+    }
+  const glm::dvec3 centre = mesh.vertex_count() ? 0.5 * (lo + hi) : glm::dvec3(0);
+  std::vector<double> footprints;
+  for (const io::Camera& cam : scene.cameras) {
+    const double depth = cam.project(centre).z;
+    if (depth > 0 && std::isfinite(depth)) footprints.push_back(depth / (0.5 * (cam.fx + cam.fy)));
+  }
+  if (footprints.empty())
+    throw InputError("scene " + scene.root.string() +
+                     ": no camera sees the body mesh's centre in front of it; cannot size the strands");
+  std::nth_element(footprints.begin(), footprints.begin() + footprints.size() / 2, footprints.end());
+  return float(0.5 * footprints[footprints.size() / 2]);
+}
+
+}  // namespace
+
+const std::array<glm::vec3, body::kRegionCount>& region_palette() {
+  // sRGB, moderately bright so that the renderer's lighting rarely clips them (hues stay readable).
+  static const std::array<glm::vec3, body::kRegionCount> palette = {{
+      {0.90f, 0.33f, 0.28f},  // leg_front: red
+      {0.93f, 0.58f, 0.18f},  // leg_rear: orange
+      {0.55f, 0.36f, 0.22f},  // paw_pads: brown
+      {0.86f, 0.80f, 0.22f},  // paws: yellow
+      {0.55f, 0.82f, 0.24f},  // front_paws: lime
+      {0.20f, 0.66f, 0.33f},  // belly: green
+      {0.18f, 0.74f, 0.70f},  // neck: teal
+      {0.24f, 0.50f, 0.92f},  // face: blue
+      {0.52f, 0.34f, 0.86f},  // ears: violet
+      {0.88f, 0.38f, 0.76f},  // inner_earcanal: magenta
+      {0.96f, 0.68f, 0.70f},  // under_tail: pink
+      {0.16f, 0.20f, 0.48f},  // eyes: navy
+      {0.68f, 0.16f, 0.42f},  // tail: plum
+      {0.52f, 0.54f, 0.12f},  // nosetip: olive
+      {0.82f, 0.60f, 0.40f},  // body: tan
+      {0.45f, 0.72f, 0.96f},  // mane: sky blue
+  }};
+  return palette;
+}
+
+std::vector<std::uint32_t> parse_view_list(const std::string& views, std::size_t camera_count) {
+  std::vector<std::uint32_t> out;
+  if (views == "all") {
+    for (std::size_t i = 0; i < camera_count; ++i) out.push_back(std::uint32_t(i));
+    return out;
+  }
+  std::size_t start = 0;
+  while (start <= views.size()) {
+    const std::size_t comma = std::min(views.find(',', start), views.size());
+    std::string item = views.substr(start, comma - start);
+    item.erase(0, item.find_first_not_of(' '));
+    item.erase(item.find_last_not_of(' ') + 1);
+    if (item.empty() || item.find_first_not_of("0123456789") != std::string::npos || item.size() > 9)
+      throw UsageError("--views: '" + item + "' is not a camera index (give 'all' or indices like 0,5,9)");
+    const std::uint64_t index = std::stoull(item);
+    if (index >= camera_count)
+      throw UsageError("--views: camera index " + item + " is out of range; the scene has " +
+                       std::to_string(camera_count) + " cameras (0.." + std::to_string(camera_count - 1) + ")");
+    if (std::find(out.begin(), out.end(), std::uint32_t(index)) == out.end()) out.push_back(std::uint32_t(index));
+    start = comma + 1;
+  }
+  return out;
+}
+
+PreviewResult render_previews(const PreviewOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (o.samples_per_axis < 1 || o.samples_per_axis > 16)
+    throw UsageError("--spp-axis must lie in [1, 16], got " + std::to_string(o.samples_per_axis));
+  if (!(o.width_scale > 0) || !std::isfinite(o.width_scale))
+    throw UsageError("--width-scale must be a positive number, got " + std::to_string(o.width_scale));
+  if (o.out.empty()) throw UsageError("--out: an output folder is needed");
+
+  const io::Scene scene = io::read_scene(o.scene);
+  scene.validate(o.scene.string());
+  const std::vector<std::uint32_t> views = parse_view_list(o.views, scene.cameras.size());
+  io::Mesh mesh = io::read_mesh(o.mesh);
+  mesh.validate(o.mesh.string());
+  if (mesh.triangle_count() == 0) throw InputError(o.mesh.string() + ": the body mesh has no triangles");
+  const io::StrandSet strands = io::read_strands(o.strands);
+  strands.validate(o.strands.string());
+  if (mesh.normals.empty()) geometry::compute_vertex_normals(mesh);
+
+  PreviewResult result;
+  // Colours per strand.
+  StrandLook look;
+  const std::uint32_t n = strands.strand_count();
+  look.root_colors.assign(n, linear(palette_color(std::int32_t(body::Region::body))));
+  if (!strands.regions.empty()) {
+    result.coloring = "strand regions";
+    for (std::uint32_t s = 0; s < n; ++s) look.root_colors[s] = linear(palette_color(strands.regions[s]));
+  } else if (!mesh.regions.empty() && mesh.vertex_count() > 0) {
+    result.coloring = "nearest body vertex region";
+    const geometry::PointIndex index(mesh.positions);
+    geometry::parallel_for(n, [&](std::size_t s0, std::size_t s1) {
+      for (std::size_t s = s0; s < s1; ++s) {
+        if (strands.points_in(std::uint32_t(s)) == 0) continue;
+        const float* root = &strands.points[3 * std::size_t(strands.offsets[s])];
+        look.root_colors[s] = linear(palette_color(mesh.regions[index.nearest(root).first]));
+      }
+    });
+  } else {
+    result.coloring = "single colour";
+  }
+  result.strand_radius = float(double(default_radius(scene, mesh)) * o.width_scale);
+  look.radius = result.strand_radius;
+  BodyLook body_look;
+  body_look.vertex_colors.assign(mesh.vertex_count(), linear(glm::vec3(0.62f)));
+  RenderOptions render_options;
+  render_options.samples_per_axis = o.samples_per_axis;
+  const StrandRenderer renderer(mesh, body_look, strands, look, render_options);
+
+  // File names: file-safe camera names, made unique with the camera index.
+  std::map<std::string, int> uses;
+  for (const std::uint32_t v : views) ++uses[file_safe(scene.cameras[v].name)];
+  std::error_code ec;
+  fs::create_directories(o.out, ec);
+  if (ec || !fs::is_directory(o.out))
+    throw InputError("--out " + o.out.string() + ": cannot create the folder" + (ec ? " (" + ec.message() + ")" : ""));
+  Progress progress("render", views.size());
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    const io::Camera& cam = scene.cameras[views[i]];
+    std::string name = file_safe(cam.name);
+    if (uses[name] > 1) name += "_" + std::to_string(views[i]);
+    const Rendered r = renderer.render(cam);
+    const fs::path file = o.out / (name + ".png");
+    io::write_png(file, r.rgb);
+    result.files.push_back(file);
+    progress.update(i + 1);
+  }
+  progress.finish();
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  log::info("render: ", views.size(), " views, ", n, " strands coloured by ", result.coloring, ", radius ",
+            result.strand_radius, " -> ", o.out.string());
+  return result;
+}
+
+}  // namespace nf::synth
