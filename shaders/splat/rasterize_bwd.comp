@@ -1,8 +1,14 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // Strand rasterisation, backward of pass 4: per tile, back to front over each pixel's contributors,
-// the exact adjoint of compositing (engine/splat/rasterizer_ref.hpp, composite_adjoint). Per
-// Gaussian, the pixels' gradients are summed in the subgroup before one float atomic per subgroup.
+// the exact adjoint of compositing (engine/splat/rasterizer_ref.hpp, composite_adjoint). The
+// pixels' gradients of each staged Gaussian are summed before they reach global memory:
+//   shared:   contributing pixels add into shared-memory sums (float atomics on shared memory), one
+//             global atomic per Gaussian and field per batch; only contributing lanes do work, which
+//             matters where Gaussians are much smaller than a tile (fur) and on CPU devices;
+//   subgroup: subgroup sums and one global atomic per subgroup (devices without shared float atomics).
+//! variant shared -DNF_SHARED_SUMS
+//! variant subgroup -DNF_SUBGROUP_SUMS
 #extension GL_EXT_shader_atomic_float : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -27,10 +33,14 @@ layout(push_constant) uniform Push {
 
 #include "nf_splat_composite.glsl"
 
+#ifdef NF_SHARED_SUMS
+shared float s_grad[10][BATCH];  // per staged Gaussian: u, v, conic a b c, opacity, depth, ox, oy, conf
+#else
 void add(uint id, uint field, float value) {
   const float sum = subgroupAdd(value);
   if (subgroupElect() && sum != 0.0) atomicAdd(grad_proj[id * 12u + field], sum);
 }
+#endif
 
 void main() {
   const uint tile = nf_linear_group();
@@ -56,6 +66,9 @@ void main() {
     const uint first = end - done_count - n;  // this batch covers [first, first + n)
     barrier();
     if (gl_LocalInvocationID.x < n) nf_stage_gaussian(gl_LocalInvocationID.x, values[first + gl_LocalInvocationID.x]);
+#ifdef NF_SHARED_SUMS
+    for (uint f = 0u; f < 10u; ++f) s_grad[f][gl_LocalInvocationID.x] = 0.0;
+#endif
     barrier();
     for (uint k = n; k-- > 0u;) {
       const uint position = first + k;
@@ -94,6 +107,20 @@ void main() {
           gv = g_power * (c.y * d.x + c.z * d.y);
         }
       }
+#ifdef NF_SHARED_SUMS
+      if (contributes) {
+        atomicAdd(s_grad[0][k], gu);
+        atomicAdd(s_grad[1][k], gv);
+        atomicAdd(s_grad[2][k], gca);
+        atomicAdd(s_grad[3][k], gcb);
+        atomicAdd(s_grad[4][k], gcc);
+        atomicAdd(s_grad[5][k], gop);
+        atomicAdd(s_grad[6][k], gdepth);
+        atomicAdd(s_grad[7][k], gox);
+        atomicAdd(s_grad[8][k], goy);
+        atomicAdd(s_grad[9][k], gconf);
+      }
+#else
       // Every invocation of the subgroup reaches here for the same k: sum, then one atomic each.
       if (subgroupAny(contributes)) {
         const uint id = s_id[k];
@@ -108,6 +135,17 @@ void main() {
         add(id, 8u, goy);
         add(id, 9u, gconf);
       }
+#endif
     }
+#ifdef NF_SHARED_SUMS
+    barrier();
+    if (gl_LocalInvocationID.x < n) {
+      const uint id = s_id[gl_LocalInvocationID.x];
+      for (uint f = 0u; f < 10u; ++f) {
+        const float v = s_grad[f][gl_LocalInvocationID.x];
+        if (v != 0.0) atomicAdd(grad_proj[id * 12u + f], v);
+      }
+    }
+#endif
   }
 }

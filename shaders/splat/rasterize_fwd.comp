@@ -48,15 +48,17 @@ void main() {
     const uint n = min(BATCH, end - first);
     if (gl_LocalInvocationID.x < n) nf_stage_gaussian(gl_LocalInvocationID.x, values[first + gl_LocalInvocationID.x]);
     barrier();
-    for (uint j = 0u; j < n && !done; ++j) {
-      if (s_mean_opacity[j].w > occluder) continue;
+    // A loop whose bounds are the same for every invocation: the Gaussian index j stays uniform,
+    // so CPU devices (lavapipe) load the staged Gaussian once per SIMD batch instead of gathering.
+    for (uint j = 0u; j < n; ++j) {
+      if (done || s_mean_opacity[j].w > occluder) continue;
       const float alpha = nf_alpha(j, nf_power(j, q));
       if (alpha <= 0.0) continue;
       const float next = T * (1.0 - alpha);
       if (next < T_MIN) {
         done = true;
         atomicAdd(s_done, 1u);
-        break;
+        continue;
       }
       const float w = alpha * T;
       acc += w * vec4(s_attr[j], s_mean_opacity[j].w);
