@@ -41,16 +41,6 @@ Scene make_scene(std::uint32_t strands, std::uint32_t points) {
   return s;
 }
 
-splat::RasterCamera raster_camera(const io::Camera& c) {
-  splat::RasterCamera r;
-  const glm::dmat4 w2c = glm::inverse(c.camera_to_world);
-  for (int row = 0; row < 3; ++row)
-    for (int col = 0; col < 4; ++col) r.world_to_camera[4 * row + col] = w2c[col][row];
-  r.fx = c.fx, r.fy = c.fy, r.cx = c.cx, r.cy = c.cy, r.width = c.width, r.height = c.height;
-  r.near = 0.01, r.far = 20;
-  return r;
-}
-
 std::map<std::string, double> pass_ms_per_run(gpu::Context& ctx, int runs) {
   std::map<std::string, double> out;
   for (const auto& [name, total] : ctx.pass_totals()) out[name] = total.milliseconds / runs;
@@ -80,7 +70,7 @@ json run_splat_suite(gpu::Context& ctx, const Options& options) {
     synth::RigOptions rig;
     rig.views = 1, rig.width = w, rig.height = h;
     const io::Camera cam = synth::camera_rings(scene.centre, scene.radius, glm::vec3(0, 1, 0), rig)[0];
-    const splat::RasterCamera rc = raster_camera(cam);
+    const splat::RasterCamera rc = splat::raster_camera(cam, 0.01, 20.0);
     const std::uint64_t pixels = std::uint64_t(w) * h;
     gpu::Buffer<float> image(ctx, pixels * splat::kChannels, "bench raster image");
     gpu::Buffer<float> grad_image(ctx, std::vector<float>(pixels * splat::kChannels, 1e-3f), "bench raster image gradient");

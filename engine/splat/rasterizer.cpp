@@ -5,6 +5,7 @@
 
 #include "engine/core/error.hpp"
 #include "engine/core/finite.hpp"
+#include "engine/gpu/chunking.hpp"
 #include "engine/gpu/context.hpp"
 #include "engine/gpu/kernel.hpp"
 #include "engine/gpu/radix_sort.hpp"
@@ -73,6 +74,17 @@ void validate(const RasterCamera& c) {
     if (!std::isfinite(v)) throw InputError("raster camera: the pose is not finite");
 }
 
+RasterCamera raster_camera(const io::Camera& camera, double near, double far) {
+  RasterCamera r;
+  const glm::dmat4 w2c = glm::inverse(camera.camera_to_world);
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 4; ++col) r.world_to_camera[4 * row + col] = w2c[col][row];
+  r.fx = camera.fx, r.fy = camera.fy, r.cx = camera.cx, r.cy = camera.cy;
+  r.width = camera.width, r.height = camera.height;
+  r.near = near, r.far = far;
+  return r;
+}
+
 struct StrandRasterizer::Impl {
   gpu::Context& context;
   std::unique_ptr<gpu::Buffer<float>> proj, grad_proj, grad_segment, final_t, no_body;
@@ -98,7 +110,13 @@ void StrandRasterizer::forward(const StrandShape& shape, gpu::BufferRange points
   validate(shape, params.gaussian, points.size / 4);
   validate(camera);
   const std::uint64_t segments = shape.segments(), pixels = std::uint64_t(camera.width) * camera.height;
-  if (segments >= (1ull << 32)) throw InputError("strands: more than 2^32 segments in one view");
+  // Compositing reads any Gaussian of the view by index, so the projected Gaussians (and their
+  // gradients) must fit one storage binding: 2.8 M segments at lavapipe's 128 MiB.
+  const std::uint64_t most = gpu::max_binding_elements(m.context, kProjected * sizeof(float));
+  if (segments > most)
+    throw InputError("strands: " + std::to_string(segments) + " segments in one view; this device rasterises at most " +
+                     std::to_string(most) + " (one " + std::to_string(most * kProjected * 4 / (1024 * 1024)) +
+                     " MiB binding of projected Gaussians); render fewer strands per view");
   gpu::require_bytes(confidence, segments * 4, "segment confidence");
   gpu::require_bytes(image, pixels * kChannels * 4, "raster image");
   m.has_body = body_depth.buffer != nullptr;

@@ -12,6 +12,7 @@
 
 #include "engine/gpu/buffer.hpp"
 #include "engine/gpu/stream.hpp"
+#include "engine/io/scene.hpp"
 #include "engine/splat/rasterizer_ref.hpp"
 #include "engine/splat/segment_gaussian.hpp"
 
@@ -19,6 +20,9 @@ namespace nf::splat {
 
 // Throws InputError naming the field (image size, intrinsics, near/far, pose).
 void validate(const RasterCamera& camera);
+
+// The rasteriser's camera for a scene camera (same pixel and axis conventions).
+RasterCamera raster_camera(const io::Camera& camera, double near, double far);
 
 class StrandRasterizer {
  public:
