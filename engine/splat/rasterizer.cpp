@@ -182,11 +182,11 @@ void StrandRasterizer::forward(const StrandShape& shape, gpu::BufferRange points
   {
     gpu::ScopedPass pass(stream, "splat/rasterize_fwd");
     const CompositePush cp{camera.width, camera.height, ntx, m.has_body ? 1u : 0u};
-    stream.dispatch(ctx.kernel("splat/rasterize_fwd", {{0, 256}}),
+    stream.dispatch(ctx.kernel("splat/rasterize_fwd", {{0, kTile * kTile}}),
                     {m.proj->range(0, segments * kProjected), m.values->range(0, std::max<std::uint64_t>(m.entries, 1)),
                      m.ranges->range(0, std::uint64_t(tiles) * 2), m.body, image, m.final_t->range(0, pixels),
                      m.last->range(0, pixels)},
-                    cp, gpu::Elements(std::uint64_t(tiles) * 256));
+                    cp, gpu::Elements(std::uint64_t(tiles) * kTile * kTile));
   }
   stream.submit_and_wait();
 }
@@ -213,11 +213,11 @@ void StrandRasterizer::backward(gpu::Stream& stream, gpu::BufferRange grad_image
     // (NF_SPLAT_SUBGROUP_SUMS=1 forces the latter so CI runs it).
     const bool shared_sums = ctx.info().features.float32_atomic_add_shared && !std::getenv("NF_SPLAT_SUBGROUP_SUMS");
     const char* variant = shared_sums ? "splat/rasterize_bwd:shared" : "splat/rasterize_bwd:subgroup";
-    stream.dispatch(ctx.kernel(variant, {{0, 256}}),
+    stream.dispatch(ctx.kernel(variant, {{0, kTile * kTile}}),
                     {m.proj->range(0, segments * kProjected), m.values->range(0, std::max<std::uint64_t>(m.entries, 1)),
                      m.ranges->range(0, std::uint64_t(tiles) * 2), m.body, m.final_t->range(0, pixels),
                      m.last->range(0, pixels), grad_image, m.grad_proj->range(0, segments * kProjected)},
-                    cp, gpu::Elements(std::uint64_t(tiles) * 256));
+                    cp, gpu::Elements(std::uint64_t(tiles) * kTile * kTile));
   }
   {
     gpu::ScopedPass pass(stream, "splat/rasterize_project_bwd");

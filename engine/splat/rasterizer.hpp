@@ -1,6 +1,6 @@
 #pragma once
 // Differentiable strand rasterisation on the GPU: strands -> one Gaussian per segment -> EWA
-// projection -> 16x16 tiles with (tile, depth) keys sorted by the radix sort -> front-to-back
+// projection -> 8x8 tiles with (tile, depth) keys sorted by the radix sort -> front-to-back
 // compositing of 5 channels (hair alpha, orientation as a doubled-angle vector, confidence,
 // depth), with the body's depth map hiding what lies behind it. The backward pass is the exact
 // adjoint, down to the strand points and the per-segment confidence. Maths, guards and layouts:

@@ -18,7 +18,7 @@
 //                o2 = (w'x^2 - w'y^2, 2 w'x w'y) / (|w|^2 + gamma), gamma = 1e-4 px^2 (edge-on
 //                segments fade to no orientation instead of dividing by zero)
 //   culled when z < near or z > far, or the 3.5-sigma rectangle misses the image.
-// Tiles of 16 x 16 pixels; a Gaussian is considered for the pixels of the tiles its rectangle
+// Tiles of 8 x 8 pixels (shaders/include/nf_splat_tile.glsl says why); a Gaussian is considered for the pixels of the tiles its rectangle
 // touches, front to back by (depth quantised to `depth_bits` bits between near and far, index).
 // Per pixel centre q = (x + 0.5, y + 0.5): r_i = min(0.99, o_i exp(-0.5 (q-u)^T conic (q-u))),
 // skipped when r_i < 1/255 or when the Gaussian lies behind the body (depth > body depth at the
@@ -37,7 +37,7 @@
 
 namespace nf::splat {
 
-inline constexpr std::uint32_t kTile = 16;
+inline constexpr std::uint32_t kTile = 8;  // twin of NF_TILE
 inline constexpr int kChannels = 5;  // alpha, orientation x, orientation y, confidence, depth
 inline constexpr int kProjected = 12;  // floats per projected Gaussian (see ProjectedLayout)
 

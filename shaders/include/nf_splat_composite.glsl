@@ -1,11 +1,12 @@
-// Shared pieces of the compositing kernels of strand rasterisation: one workgroup per 16x16 tile,
-// invocation i shades pixel (i % 16, i / 16) of it; Gaussians are staged in shared memory 256 at a
-// time. Constants and rules as in engine/splat/rasterizer_ref.hpp (composite, composite_adjoint).
+// Shared pieces of the compositing kernels of strand rasterisation: one workgroup per tile
+// (nf_splat_tile.glsl), invocation i shades pixel (i % NF_TILE, i / NF_TILE) of it; Gaussians are
+// staged in shared memory one per invocation at a time. Constants and rules as in engine/splat/rasterizer_ref.hpp (composite, composite_adjoint).
 #ifndef NF_SPLAT_COMPOSITE_GLSL
 #define NF_SPLAT_COMPOSITE_GLSL
+#include "nf_splat_tile.glsl"
 
 const float ALPHA_MIN = 1.0 / 255.0, ALPHA_MAX = 0.99, T_MIN = 5e-5;  // see rasterizer_ref.hpp
-const uint BATCH = 256u;
+const uint BATCH = 16u;
 
 shared vec4 s_mean_opacity[BATCH];  // u, v, opacity, depth
 shared vec3 s_conic[BATCH];

@@ -4,7 +4,7 @@
 // orientation x/y, confidence, depth; planar), the final transmittance and how far into the tile's
 // list each pixel went (for the backward pass). Gaussians behind the body depth are skipped.
 
-layout(constant_id = 0) const uint WG = 256;
+layout(constant_id = 0) const uint WG = 64;  // NF_TILE^2
 layout(local_size_x_id = 0) in;
 #include "nf_index.glsl"
 
@@ -26,10 +26,10 @@ shared uint s_done;
 
 void main() {
   const uint tile = nf_linear_group();
-  if (tile >= pc.tiles_x * ((pc.height + 15u) / 16u)) return;  // folded dispatches may overshoot
+  if (tile >= pc.tiles_x * ((pc.height + NF_TILE - 1u) / NF_TILE)) return;  // folded dispatches may overshoot
   const uint ty = tile / pc.tiles_x, tx = tile - ty * pc.tiles_x;
-  const uint lx = gl_LocalInvocationID.x % 16u, ly = gl_LocalInvocationID.x / 16u;
-  const uint px = tx * 16u + lx, py = ty * 16u + ly;
+  const uint lx = gl_LocalInvocationID.x % NF_TILE, ly = gl_LocalInvocationID.x / NF_TILE;
+  const uint px = tx * NF_TILE + lx, py = ty * NF_TILE + ly;
   const bool inside = px < pc.width && py < pc.height;
   const uint pix = py * pc.width + px;
   const float occluder = (inside && pc.has_body != 0u) ? body_depth[pix] : 3.0e38;

@@ -1,7 +1,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // Strand rasterisation, pass 1: every segment becomes a screen-space Gaussian (12 floats, see
-// nf_splat_project.glsl) and counts the 16x16 tiles its 3.5-sigma square touches. One invocation
+// nf_splat_project.glsl) and counts the tiles its 3.5-sigma square touches. One invocation
 // per segment. Host: engine/splat/rasterizer.cpp.
 
 layout(constant_id = 0) const uint WG = 128;
@@ -9,6 +9,7 @@ layout(local_size_x_id = 0) in;
 #include "nf_index.glsl"
 #include "nf_splat_camera.glsl"
 #include "nf_splat_project.glsl"
+#include "nf_splat_tile.glsl"
 
 layout(std430, binding = 0) readonly buffer Points { float points[]; };     // strands * L * 3
 layout(std430, binding = 1) readonly buffer Conf { float conf[]; };         // per segment
@@ -29,10 +30,10 @@ void main() {
   for (uint i = 0u; i < P_FLOATS; ++i) proj[g * P_FLOATS + i] = o[i];
   uint count = 0u, r0 = 0u, r1 = 0u;
   if (valid) {
-    const int ntx = int((pc.width + 15u) / 16u), nty = int((pc.height + 15u) / 16u);
+    const int ntx = int((pc.width + NF_TILE - 1u) / NF_TILE), nty = int((pc.height + NF_TILE - 1u) / NF_TILE);
     const float r = o[P_RADIUS];
-    const int x0 = clamp(int(floor((o[P_U] - r) / 16.0)), 0, ntx - 1), x1 = clamp(int(floor((o[P_U] + r) / 16.0)), 0, ntx - 1);
-    const int y0 = clamp(int(floor((o[P_V] - r) / 16.0)), 0, nty - 1), y1 = clamp(int(floor((o[P_V] + r) / 16.0)), 0, nty - 1);
+    const int x0 = clamp(int(floor((o[P_U] - r) / float(NF_TILE))), 0, ntx - 1), x1 = clamp(int(floor((o[P_U] + r) / float(NF_TILE))), 0, ntx - 1);
+    const int y0 = clamp(int(floor((o[P_V] - r) / float(NF_TILE))), 0, nty - 1), y1 = clamp(int(floor((o[P_V] + r) / float(NF_TILE))), 0, nty - 1);
     count = uint((x1 - x0 + 1) * (y1 - y0 + 1));
     r0 = uint(x0) | (uint(y0) << 16);
     r1 = uint(x1) | (uint(y1) << 16);
