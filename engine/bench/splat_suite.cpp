@@ -111,7 +111,7 @@ json run_splat_suite(gpu::Context& ctx, const Options& options) {
     }
     const double entries = double(raster.tile_entries());
     // Compositing evaluates each (tile entry, pixel of the tile) pair: ~20 flops each.
-    const double composite_flops = entries * 256 * 20;
+    const double composite_flops = entries * splat::kTile * splat::kTile * 20;
     const double fwd_composite_ms = fwd_passes.count("splat/rasterize_fwd") ? fwd_passes.at("splat/rasterize_fwd") : 0;
     json passes_f = json::object(), passes_b = json::object();
     for (const auto& [k, v] : fwd_passes) passes_f[k] = v;
