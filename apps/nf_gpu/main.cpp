@@ -15,6 +15,7 @@
 #include "engine/metrics/strand_metrics.hpp"
 #include "engine/metrics/surface_metrics.hpp"
 #include "engine/synth/preview.hpp"
+#include "engine/orient/scene_orientation.hpp"
 #include "engine/synth/synth_scene.hpp"
 
 namespace {
@@ -158,6 +159,13 @@ int run_synth(const std::string& out, const nf::synth::SynthOptions& options) {
   return 0;
 }
 
+int run_orient(const nf::orient::SceneOrientationOptions& options) {
+  nf::gpu::Context context;
+  const auto files = nf::orient::write_scene_orientations(context, options);
+  std::printf("orient: %zu views -> %s\n", files.size() / 2, options.out.string().c_str());
+  return 0;
+}
+
 int run_render(const nf::synth::PreviewOptions& options) {
   const auto r = nf::synth::render_previews(options);
   std::printf("render: %zu views -> %s (strand radius %.4g scene units, coloured by %s, %.1f s)\n", r.files.size(),
@@ -240,6 +248,13 @@ int main(int argc, char** argv) {
   render->add_option("--spp-axis", render_options.samples_per_axis, "anti-aliasing: s x s samples per pixel (default 3)")->check(CLI::Range(1, 16));
   render->add_option("--width-scale", render_options.width_scale, "strand width factor (default 1: about one pixel at the animal)")->check(CLI::PositiveNumber);
 
+  nf::orient::SceneOrientationOptions orient_options;
+  std::string orient_scene, orient_out;
+  auto* orient = app.add_subcommand("orient", "Gabor orientation maps of a scene's photos (EXR: orientation, confidence; PNG preview)");
+  orient->add_option("--scene", orient_scene, "scene folder or transforms.json (any format nf_gpu reads)")->required();
+  orient->add_option("--out", orient_out, "output folder: <camera>.exr and <camera>.png per view")->required();
+  orient->add_option("--views", orient_options.views, "'all' (default) or camera indices like 0,5,9");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -253,6 +268,10 @@ int main(int argc, char** argv) {
     if (*bench) return run_bench(bench_options, bench_json, profile);
     if (*metrics) return run_metrics(metrics_options);
     if (*synth) return run_synth(synth_out, synth_options);
+    if (*orient) {
+      orient_options.scene = orient_scene, orient_options.out = orient_out;
+      return run_orient(orient_options);
+    }
     if (*render) {
       render_options.strands = render_strands, render_options.mesh = render_mesh;
       render_options.scene = render_scene, render_options.out = render_out;

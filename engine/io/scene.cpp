@@ -1,5 +1,6 @@
 #include "engine/io/scene.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <tuple>
 
@@ -64,6 +65,30 @@ void Scene::check_files(const std::string& source) const {
     check(c.image, "image");
     if (!c.mask.empty()) check(c.mask, "mask");
   }
+}
+
+std::vector<std::uint32_t> parse_view_list(const std::string& views, std::size_t camera_count) {
+  std::vector<std::uint32_t> out;
+  if (views == "all") {
+    for (std::size_t i = 0; i < camera_count; ++i) out.push_back(std::uint32_t(i));
+    return out;
+  }
+  std::size_t start = 0;
+  while (start <= views.size()) {
+    const std::size_t comma = std::min(views.find(',', start), views.size());
+    std::string item = views.substr(start, comma - start);
+    item.erase(0, item.find_first_not_of(' '));
+    item.erase(item.find_last_not_of(' ') + 1);
+    if (item.empty() || item.find_first_not_of("0123456789") != std::string::npos || item.size() > 9)
+      throw UsageError("--views: '" + item + "' is not a camera index (give 'all' or indices like 0,5,9)");
+    const std::uint64_t index = std::stoull(item);
+    if (index >= camera_count)
+      throw UsageError("--views: camera index " + item + " is out of range; the scene has " +
+                       std::to_string(camera_count) + " cameras (0.." + std::to_string(camera_count - 1) + ")");
+    if (std::find(out.begin(), out.end(), std::uint32_t(index)) == out.end()) out.push_back(std::uint32_t(index));
+    start = comma + 1;
+  }
+  return out;
 }
 
 }  // namespace nf::io

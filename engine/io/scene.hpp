@@ -46,6 +46,10 @@ Scene read_colmap_scene(const std::filesystem::path& folder, const std::filesyst
 // A folder in any of the formats above (or a transforms.json file).
 Scene read_scene(const std::filesystem::path& path);
 
+// The cameras a `--views` argument names: "all", or indices like "0,5,9" (duplicates dropped,
+// order kept). Throws UsageError naming the bad entry or the valid range.
+std::vector<std::uint32_t> parse_view_list(const std::string& views, std::size_t camera_count);
+
 // OpenCV camera axes (x right, y down, z forward) <-> OpenGL (x right, y up, -z forward).
 glm::dmat4 opencv_to_opengl(const glm::dmat4& camera_to_world_cv);
 

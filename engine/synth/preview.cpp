@@ -86,30 +86,6 @@ const std::array<glm::vec3, body::kRegionCount>& region_palette() {
   return palette;
 }
 
-std::vector<std::uint32_t> parse_view_list(const std::string& views, std::size_t camera_count) {
-  std::vector<std::uint32_t> out;
-  if (views == "all") {
-    for (std::size_t i = 0; i < camera_count; ++i) out.push_back(std::uint32_t(i));
-    return out;
-  }
-  std::size_t start = 0;
-  while (start <= views.size()) {
-    const std::size_t comma = std::min(views.find(',', start), views.size());
-    std::string item = views.substr(start, comma - start);
-    item.erase(0, item.find_first_not_of(' '));
-    item.erase(item.find_last_not_of(' ') + 1);
-    if (item.empty() || item.find_first_not_of("0123456789") != std::string::npos || item.size() > 9)
-      throw UsageError("--views: '" + item + "' is not a camera index (give 'all' or indices like 0,5,9)");
-    const std::uint64_t index = std::stoull(item);
-    if (index >= camera_count)
-      throw UsageError("--views: camera index " + item + " is out of range; the scene has " +
-                       std::to_string(camera_count) + " cameras (0.." + std::to_string(camera_count - 1) + ")");
-    if (std::find(out.begin(), out.end(), std::uint32_t(index)) == out.end()) out.push_back(std::uint32_t(index));
-    start = comma + 1;
-  }
-  return out;
-}
-
 PreviewResult render_previews(const PreviewOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
   if (o.samples_per_axis < 1 || o.samples_per_axis > 16)
@@ -120,7 +96,7 @@ PreviewResult render_previews(const PreviewOptions& o) {
 
   const io::Scene scene = io::read_scene(o.scene);
   scene.validate(o.scene.string());
-  const std::vector<std::uint32_t> views = parse_view_list(o.views, scene.cameras.size());
+  const std::vector<std::uint32_t> views = io::parse_view_list(o.views, scene.cameras.size());
   io::Mesh mesh = io::read_mesh(o.mesh);
   mesh.validate(o.mesh.string());
   if (mesh.triangle_count() == 0) throw InputError(o.mesh.string() + ": the body mesh has no triangles");

@@ -47,9 +47,6 @@ struct PreviewResult {
 // sRGB colours, indexed by region id (body::Region).
 const std::array<glm::vec3, body::kRegionCount>& region_palette();
 
-// Parses "all" or a comma-separated list of indices below `camera_count` (UsageError naming --views
-// and the bad entry otherwise).
-std::vector<std::uint32_t> parse_view_list(const std::string& views, std::size_t camera_count);
 
 // Reads the inputs (InputError naming the file and field when one is missing or malformed),
 // renders the chosen views and writes them. UsageError for bad option values.

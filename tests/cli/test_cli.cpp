@@ -142,3 +142,24 @@ TEST_CASE("usage errors exit with 2") {
   CHECK(run("bench --suite no-such-suite").code == 2);
   CHECK(run("--help").code == 0);
 }
+
+TEST_CASE("nf_gpu synth, orient and render chain on a tiny scene; bad views exit with 2") {
+  const auto dir = std::filesystem::temp_directory_path() / "nf_cli_chain";
+  std::filesystem::remove_all(dir);
+  const std::string scene = (dir / "scene").string();
+  const Result s = run("synth --animal fox --views 2 --res 48 --strands 1500 --spp-axis 1 --out " + scene);
+  REQUIRE(s.code == 0);
+  CHECK(s.output.find("synth: fox, 2 views at 48x48") != std::string::npos);
+  CHECK(run("synth --animal fox --views 2 --res 48 --strands 1500 --out " + scene).code == 2);  // exists, no --overwrite
+  const Result o = run("orient --scene " + scene + " --out " + (dir / "orient").string());
+  REQUIRE(o.code == 0);
+  CHECK(std::filesystem::exists(dir / "orient" / "001.exr"));
+  CHECK(std::filesystem::exists(dir / "orient" / "001.png"));
+  CHECK(run("orient --scene " + scene + " --out " + (dir / "orient").string() + " --views 7").code == 2);
+  const Result r = run("render --strands " + scene + "/gt/strands.hair --mesh " + scene + "/gt/bald.ply --scene " + scene +
+                       " --views 1 --spp-axis 1 --out " + (dir / "render").string());
+  CHECK(r.code == 0);
+  CHECK(std::filesystem::exists(dir / "render" / "001.png"));
+  CHECK(run("synth --animal unicorn --out " + (dir / "u").string()).code == 2);
+  std::filesystem::remove_all(dir);
+}

@@ -146,8 +146,8 @@ TEST_CASE("previews: bad inputs are refused with the file or field named") {
   CHECK_THROWS_WITH_AS(synth::render_previews(o), doctest::Contains("--width-scale"), UsageError);
   CHECK(!fs::exists(t.root / "bad"));  // nothing written on a refused run
 
-  CHECK(synth::parse_view_list("all", 3) == std::vector<std::uint32_t>{0, 1, 2});
-  CHECK(synth::parse_view_list("2, 0,2", 3) == std::vector<std::uint32_t>{2, 0});
-  CHECK_THROWS_AS(synth::parse_view_list("", 3), UsageError);
-  CHECK_THROWS_AS(synth::parse_view_list("1,", 3), UsageError);
+  CHECK(io::parse_view_list("all", 3) == std::vector<std::uint32_t>{0, 1, 2});
+  CHECK(io::parse_view_list("2, 0,2", 3) == std::vector<std::uint32_t>{2, 0});
+  CHECK_THROWS_AS(io::parse_view_list("", 3), UsageError);
+  CHECK_THROWS_AS(io::parse_view_list("1,", 3), UsageError);
 }
