@@ -26,7 +26,10 @@ class ByteReader {
   ByteReader(const std::vector<char>& bytes, std::string source) : bytes_(bytes), source_(std::move(source)) {}
   std::size_t position() const { return position_; }
   std::size_t remaining() const { return bytes_.size() - position_; }
-  void seek(std::size_t p) { position_ = p; }
+  void seek(std::size_t p) {
+    if (p > bytes_.size()) throw InputError(source_ + ": offset " + std::to_string(p) + " lies beyond the end of the file");
+    position_ = p;
+  }
 
   // Copies `count` elements of T into `out`, or throws naming `field` if the file is too short.
   template <class T>
@@ -35,6 +38,7 @@ class ByteReader {
       throw InputError(source_ + ": " + field + " needs " + std::to_string(count * sizeof(T)) + " bytes at offset " +
                        std::to_string(position_) + " but the file ends after " + std::to_string(remaining()) +
                        " (truncated, or a count is wrong)");
+    if (count == 0) return;  // `out` may be the null data() of an empty vector: memcpy must not see it
     std::memcpy(out, bytes_.data() + position_, count * sizeof(T));
     position_ += count * sizeof(T);
   }
