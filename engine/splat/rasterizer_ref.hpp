@@ -79,52 +79,69 @@ struct Vec3T {
   T x, y, z;
 };
 
+// Everything the projection of one segment computes before its outputs, shared by the forward and
+// the adjoint so both see the same numbers.
+template <class T>
+struct SegmentProjection {
+  T m[3], d[3], z;          // camera-space mean and segment vector, depth
+  T fx, fy, tx, ty;         // focal lengths; clamped m.x/z, m.y/z
+  bool free_x, free_y;      // the clamp is inactive (the gradient flows)
+  T J[2][3];                // projection Jacobian at the mean
+  T s, a;                   // |d|^2 + delta^2; the covariance's d d^T coefficient
+  T w[2];                   // J d, the projected segment (pixels)
+  T s00, s01, s11;          // J M J^T
+  T A, B, C, D, D0;         // S = J M J^T + low-pass, det S, det(J M J^T)
+
+  SegmentProjection(const T* p0, const T* p1, const RasterCamera& cam, const RasterParams& rp) {
+    const SegmentGaussianTerms<T> g(rp.gaussian);
+    T W[12];
+    for (int i = 0; i < 12; ++i) W[i] = T(cam.world_to_camera[i]);
+    const T mu[3] = {T(0.5) * (p0[0] + p1[0]), T(0.5) * (p0[1] + p1[1]), T(0.5) * (p0[2] + p1[2])};
+    const T dw[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+    for (int r = 0; r < 3; ++r) {
+      m[r] = W[4 * r] * mu[0] + W[4 * r + 1] * mu[1] + W[4 * r + 2] * mu[2] + W[4 * r + 3];
+      d[r] = W[4 * r] * dw[0] + W[4 * r + 1] * dw[1] + W[4 * r + 2] * dw[2];
+    }
+    z = -m[2];
+    fx = T(cam.fx), fy = T(cam.fy);
+    const T lim_x = T(1.3) * T(std::max(cam.cx, cam.width - cam.cx) / cam.fx);
+    const T lim_y = T(1.3) * T(std::max(cam.cy, cam.height - cam.cy) / cam.fy);
+    const T rx = m[0] / z, ry = m[1] / z;
+    free_x = rx > -lim_x && rx < lim_x, free_y = ry > -lim_y && ry < lim_y;
+    tx = std::clamp(rx, -lim_x, lim_x), ty = std::clamp(ry, -lim_y, lim_y);
+    J[0][0] = fx / z, J[0][1] = T(0), J[0][2] = fx * tx / z;
+    J[1][0] = T(0), J[1][1] = -fy / z, J[1][2] = -fy * ty / z;
+    s = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] + g.delta2;
+    a = g.k2 - g.eps2 / s;
+    // J M J^T = eps^2 J J^T + a (J d)(J d)^T.
+    w[0] = J[0][0] * d[0] + J[0][2] * d[2], w[1] = J[1][1] * d[1] + J[1][2] * d[2];
+    const T jj00 = J[0][0] * J[0][0] + J[0][2] * J[0][2], jj01 = J[0][2] * J[1][2], jj11 = J[1][1] * J[1][1] + J[1][2] * J[1][2];
+    s00 = g.eps2 * jj00 + a * w[0] * w[0], s01 = g.eps2 * jj01 + a * w[0] * w[1], s11 = g.eps2 * jj11 + a * w[1] * w[1];
+    const T lp = T(rp.low_pass);
+    A = s00 + lp, B = s01, C = s11 + lp;
+    D = A * C - B * B, D0 = s00 * s11 - s01 * s01;
+  }
+};
+
 // Forward projection of one segment into kProjected floats; returns false when culled.
 template <class T>
 bool project_segment(const T* p0, const T* p1, T conf, const RasterCamera& cam, const RasterParams& rp, T* out) {
   std::fill(out, out + kProjected, T(0));
-  const SegmentGaussianTerms<T> g(rp.gaussian);
-  const T* W = nullptr;
-  T Wm[12];
-  for (int i = 0; i < 12; ++i) Wm[i] = T(cam.world_to_camera[i]);
-  W = Wm;
-  const T mu[3] = {T(0.5) * (p0[0] + p1[0]), T(0.5) * (p0[1] + p1[1]), T(0.5) * (p0[2] + p1[2])};
-  const T dw[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
-  T m[3], d[3];
-  for (int r = 0; r < 3; ++r) {
-    m[r] = W[4 * r] * mu[0] + W[4 * r + 1] * mu[1] + W[4 * r + 2] * mu[2] + W[4 * r + 3];
-    d[r] = W[4 * r] * dw[0] + W[4 * r + 1] * dw[1] + W[4 * r + 2] * dw[2];
-  }
-  const T z = -m[2];
-  if (!(z >= T(cam.near)) || !(z <= T(cam.far))) return false;
-  const T fx = T(cam.fx), fy = T(cam.fy);
-  const T lim_x = T(1.3) * T(std::max(cam.cx, cam.width - cam.cx) / cam.fx);
-  const T lim_y = T(1.3) * T(std::max(cam.cy, cam.height - cam.cy) / cam.fy);
-  const T tx = std::clamp(m[0] / z, -lim_x, lim_x), ty = std::clamp(m[1] / z, -lim_y, lim_y);
-  const T J[2][3] = {{fx / z, T(0), fx * tx / z}, {T(0), -fy / z, -fy * ty / z}};
-  const T len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-  const T a = g.k2 - g.eps2 / (len2 + g.delta2);
-  // J M J^T = eps^2 J J^T + a (J d)(J d)^T.
-  const T w[2] = {J[0][0] * d[0] + J[0][2] * d[2], J[1][1] * d[1] + J[1][2] * d[2]};
-  const T jj00 = J[0][0] * J[0][0] + J[0][2] * J[0][2], jj01 = J[0][2] * J[1][2], jj11 = J[1][1] * J[1][1] + J[1][2] * J[1][2];
-  const T s00 = g.eps2 * jj00 + a * w[0] * w[0], s01 = g.eps2 * jj01 + a * w[0] * w[1], s11 = g.eps2 * jj11 + a * w[1] * w[1];
-  const T lp = T(rp.low_pass);
-  const T A = s00 + lp, B = s01, C = s11 + lp;
-  const T det = A * C - B * B, det0 = s00 * s11 - s01 * s01;
-  if (!(det > T(0))) return false;
-  const T ratio = det0 / det;
-  const T opacity = std::sqrt(std::max(ratio, T(2.5e-5)));
-  const T mid = T(0.5) * (A + C);
-  const T lambda = mid + std::sqrt(std::max(T(0.1), mid * mid - det));
+  const SegmentProjection<T> q(p0, p1, cam, rp);
+  if (!(q.z >= T(cam.near)) || !(q.z <= T(cam.far))) return false;
+  if (!(q.D > T(0))) return false;
+  const T opacity = std::sqrt(std::max(q.D0 / q.D, T(2.5e-5)));
+  const T mid = T(0.5) * (q.A + q.C);
+  const T lambda = mid + std::sqrt(std::max(T(0.1), mid * mid - q.D));
   const T radius = std::ceil(T(3.5) * std::sqrt(lambda));
-  const T u = T(cam.cx) + fx * m[0] / z, v = T(cam.cy) - fy * m[1] / z;
+  const T u = T(cam.cx) + q.fx * q.m[0] / q.z, v = T(cam.cy) - q.fy * q.m[1] / q.z;
   if (u + radius <= T(0) || v + radius <= T(0) || u - radius >= T(cam.width) || v - radius >= T(cam.height)) return false;
-  const T n = w[0] * w[0] + w[1] * w[1] + T(rp.orientation_guard);
+  const T n = q.w[0] * q.w[0] + q.w[1] * q.w[1] + T(rp.orientation_guard);
   out[kU] = u, out[kV] = v;
-  out[kConicA] = C / det, out[kConicB] = -B / det, out[kConicC] = A / det;
-  out[kOpacity] = opacity, out[kDepth] = z;
-  out[kOrientX] = (w[0] * w[0] - w[1] * w[1]) / n;
-  out[kOrientY] = T(-2) * w[0] * w[1] / n;  // screen y is up for the angle: w' = (w.x, -w.y)
+  out[kConicA] = q.C / q.D, out[kConicB] = -q.B / q.D, out[kConicC] = q.A / q.D;
+  out[kOpacity] = opacity, out[kDepth] = q.z;
+  out[kOrientX] = (q.w[0] * q.w[0] - q.w[1] * q.w[1]) / n;
+  out[kOrientY] = T(-2) * q.w[0] * q.w[1] / n;  // screen y is up for the angle: w' = (w.x, -w.y)
   out[kConf] = conf, out[kRadius] = radius, out[kValid] = T(1);
   return true;
 }
@@ -137,32 +154,10 @@ T project_segment_adjoint(const T* p0, const T* p1, const RasterCamera& cam, con
   T fwd[kProjected];
   if (!project_segment(p0, p1, T(0), cam, rp, fwd)) return T(0);
   const SegmentGaussianTerms<T> gt(rp.gaussian);
+  const SegmentProjection<T> q(p0, p1, cam, rp);
+  const auto& [m, d, z, fx, fy, tx, ty, free_x, free_y, J, s, a, w, s00, s01, s11, A, B, C, D, D0] = q;
   T W[12];
   for (int i = 0; i < 12; ++i) W[i] = T(cam.world_to_camera[i]);
-  const T mu[3] = {T(0.5) * (p0[0] + p1[0]), T(0.5) * (p0[1] + p1[1]), T(0.5) * (p0[2] + p1[2])};
-  const T dw[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
-  T m[3], d[3];
-  for (int r = 0; r < 3; ++r) {
-    m[r] = W[4 * r] * mu[0] + W[4 * r + 1] * mu[1] + W[4 * r + 2] * mu[2] + W[4 * r + 3];
-    d[r] = W[4 * r] * dw[0] + W[4 * r + 1] * dw[1] + W[4 * r + 2] * dw[2];
-  }
-  const T z = -m[2];
-  const T fx = T(cam.fx), fy = T(cam.fy);
-  const T lim_x = T(1.3) * T(std::max(cam.cx, cam.width - cam.cx) / cam.fx);
-  const T lim_y = T(1.3) * T(std::max(cam.cy, cam.height - cam.cy) / cam.fy);
-  const T rx = m[0] / z, ry = m[1] / z;
-  const bool free_x = rx > -lim_x && rx < lim_x, free_y = ry > -lim_y && ry < lim_y;
-  const T tx = std::clamp(rx, -lim_x, lim_x), ty = std::clamp(ry, -lim_y, lim_y);
-  const T J[2][3] = {{fx / z, T(0), fx * tx / z}, {T(0), -fy / z, -fy * ty / z}};
-  const T len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-  const T s = len2 + gt.delta2;
-  const T a = gt.k2 - gt.eps2 / s;
-  const T w[2] = {J[0][0] * d[0] + J[0][2] * d[2], J[1][1] * d[1] + J[1][2] * d[2]};
-  const T jj00 = J[0][0] * J[0][0] + J[0][2] * J[0][2], jj01 = J[0][2] * J[1][2], jj11 = J[1][1] * J[1][1] + J[1][2] * J[1][2];
-  const T s00 = gt.eps2 * jj00 + a * w[0] * w[0], s01 = gt.eps2 * jj01 + a * w[0] * w[1], s11 = gt.eps2 * jj11 + a * w[1] * w[1];
-  const T lp = T(rp.low_pass);
-  const T A = s00 + lp, B = s01, C = s11 + lp;
-  const T D = A * C - B * B, D0 = s00 * s11 - s01 * s01;
 
   // Conic (C/D, -B/D, A/D) and opacity sqrt(D0/D) -> dL/d(A, B, C) and dL/d(s00, s01, s11).
   const T D2 = D * D;
