@@ -267,6 +267,26 @@ T gaussian_alpha(const T* g, T qx, T qy, T* power_out = nullptr) {
   return raw < T(kAlphaMin) ? T(0) : (raw - T(kAlphaMin)) / (T(1) - T(kAlphaMin));
 }
 
+// The Gaussians that contribute at a pixel, front to back, and the transmittance left after them.
+template <class T>
+std::vector<std::uint32_t> pixel_contributors(const std::vector<T>& proj, const RasterCamera& cam, const std::vector<float>& body_depth,
+                                              std::uint32_t px, std::uint32_t py, T& transmittance) {
+  const double occluder = body_depth.empty() ? 1e30 : body_depth[std::size_t(py) * cam.width + px];
+  std::vector<std::uint32_t> used;
+  transmittance = T(1);
+  for (std::uint32_t i : pixel_order(proj, cam, px, py)) {
+    const T* g = &proj[std::size_t(i) * kProjected];
+    if (double(g[kDepth]) > occluder) continue;
+    const T alpha = gaussian_alpha(g, T(px) + T(0.5), T(py) + T(0.5));
+    if (alpha <= T(0)) continue;
+    const T next = transmittance * (T(1) - alpha);
+    if (next < T(kTransmittanceMin)) break;
+    used.push_back(i);
+    transmittance = next;
+  }
+  return used;
+}
+
 // Compositing of all pixels: image (kChannels x H x W, planar). body_depth (H x W) may be empty.
 template <class T>
 void composite(const std::vector<T>& proj, const RasterCamera& cam, const std::vector<float>& body_depth, std::vector<T>& image) {
@@ -275,20 +295,17 @@ void composite(const std::vector<T>& proj, const RasterCamera& cam, const std::v
   for (std::uint32_t py = 0; py < H; ++py)
     for (std::uint32_t px = 0; px < W; ++px) {
       const std::size_t pix = std::size_t(py) * W + px;
-      const double occluder = body_depth.empty() ? 1e30 : body_depth[pix];
+      T T_end;
+      const std::vector<std::uint32_t> used = pixel_contributors(proj, cam, body_depth, px, py, T_end);
       T Tr = T(1), acc[kChannels] = {0, 0, 0, 0, 0};
-      for (std::uint32_t i : pixel_order(proj, cam, px, py)) {
+      for (std::uint32_t i : used) {
         const T* g = &proj[std::size_t(i) * kProjected];
-        if (double(g[kDepth]) > occluder) continue;
         const T alpha = gaussian_alpha(g, T(px) + T(0.5), T(py) + T(0.5));
-        if (alpha <= T(0)) continue;
-        const T next = Tr * (T(1) - alpha);
-        if (next < T(kTransmittanceMin)) break;
         const T w = alpha * Tr;
         acc[1] += w * g[kOrientX], acc[2] += w * g[kOrientY], acc[3] += w * g[kConf], acc[4] += w * g[kDepth];
-        Tr = next;
+        Tr *= T(1) - alpha;
       }
-      image[pix] = T(1) - Tr;
+      image[pix] = T(1) - T_end;
       for (int c = 1; c < kChannels; ++c) image[std::size_t(c) * W * H + pix] = acc[c];
     }
 }
@@ -302,20 +319,8 @@ void composite_adjoint(const std::vector<T>& proj, const RasterCamera& cam, cons
   for (std::uint32_t py = 0; py < H; ++py)
     for (std::uint32_t px = 0; px < W; ++px) {
       const std::size_t pix = std::size_t(py) * W + px;
-      const double occluder = body_depth.empty() ? 1e30 : body_depth[pix];
-      // Forward again to find the contributors and the final transmittance.
-      std::vector<std::uint32_t> used;
-      T Tr = T(1);
-      for (std::uint32_t i : pixel_order(proj, cam, px, py)) {
-        const T* g = &proj[std::size_t(i) * kProjected];
-        if (double(g[kDepth]) > occluder) continue;
-        const T alpha = gaussian_alpha(g, T(px) + T(0.5), T(py) + T(0.5));
-        if (alpha <= T(0)) continue;
-        const T next = Tr * (T(1) - alpha);
-        if (next < T(kTransmittanceMin)) break;
-        used.push_back(i);
-        Tr = next;
-      }
+      T Tr;
+      const std::vector<std::uint32_t> used = pixel_contributors(proj, cam, body_depth, px, py, Tr);
       T gimg[kChannels];
       for (int c = 0; c < kChannels; ++c) gimg[c] = grad_image[std::size_t(c) * W * H + pix];
       // Channel values per Gaussian: alpha channel counts 1 per weight... it is 1 - T, handled apart.
