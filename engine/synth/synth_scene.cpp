@@ -63,9 +63,13 @@ void check_destination(const fs::path& out, bool overwrite) {
 
 }  // namespace
 
-json synthesize_scene(const fs::path& out_dir, const SynthOptions& o) {
+json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
   if (o.views == 0 || o.resolution < 8 || o.resolution > 8192) throw UsageError("synth: --views must be >= 1 and --res in [8, 8192]");
   if (o.strands == 0) throw UsageError("synth: --strands must be >= 1");
+  // "scenes/cat/" and "scenes/./cat" name the same folder; the temp folder sits beside it.
+  fs::path out_dir = fs::absolute(requested_out).lexically_normal();
+  if (!out_dir.has_filename()) out_dir = out_dir.parent_path();
+  if (out_dir == out_dir.root_path()) throw UsageError("synth: --out must name a folder, not " + out_dir.string());
   check_destination(out_dir, o.overwrite);
   const fs::path out = out_dir.parent_path() / (out_dir.filename().string() + ".partial");
   fs::remove_all(out);

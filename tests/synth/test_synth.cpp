@@ -244,10 +244,11 @@ TEST_CASE("a written synthetic scene: files, ground truth, and roots inside the 
     }
     CHECK(fraction_in_masks(wrong, roots) < 0.5);
 
-    // Overwriting an earlier synth scene is allowed when asked.
+    // Overwriting an earlier synth scene is allowed when asked, however the folder is spelled.
     o.overwrite = true, o.views = 2;
-    synth::synthesize_scene(out, o);
+    synth::synthesize_scene(out.string() + "/", o);
     CHECK(io::read_scene(out).cameras.size() == 2);
+    CHECK(!fs::exists(out / ".partial"));
   }
   fs::remove_all(root);
 }
