@@ -3,6 +3,7 @@
 #include "engine/nn/encoding_gradcheck.hpp"
 #include "engine/nn/loss_gradcheck.hpp"
 #include "engine/nn/mlp_gradcheck.hpp"
+#include "engine/neus/volume_render_gradcheck.hpp"
 #include "engine/splat/rasterizer_gradcheck.hpp"
 #include "engine/splat/image_losses_gradcheck.hpp"
 #include "engine/splat/segment_gaussian_gradcheck.hpp"
@@ -18,6 +19,7 @@ std::vector<std::unique_ptr<DifferentiableKernel>> all_kernels() {
   kernels.push_back(splat::make_segment_gaussian_check());
   kernels.push_back(splat::make_image_losses_check());
   kernels.push_back(splat::make_rasterizer_check());
+  kernels.push_back(neus::make_volume_render_check());
   return kernels;
 }
 
