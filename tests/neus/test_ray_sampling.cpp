@@ -13,6 +13,7 @@
 #include "engine/io/scene.hpp"
 #include "engine/neus/ray_sampling.hpp"
 #include "engine/neus/visual_hull.hpp"
+#include "tests/support/scene_fixtures.hpp"
 
 using namespace nf;
 using neus::RayClass;
@@ -22,17 +23,6 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 const glm::dvec3 kCentre(3.0, -2.0, 1.0);
 constexpr double kRadius = 0.5;
-
-glm::dmat4 look_at_c2w(glm::dvec3 eye, glm::dvec3 target, glm::dvec3 up = {0, 1, 0}) {
-  const glm::dvec3 z = glm::normalize(eye - target);  // the camera looks down -z
-  glm::dvec3 x = glm::cross(up, z);
-  if (glm::length(x) < 1e-9) x = glm::cross(glm::dvec3(1, 0, 0), z);
-  x = glm::normalize(x);
-  const glm::dvec3 y = glm::cross(z, x);
-  glm::dmat4 m(1.0);
-  m[0] = glm::dvec4(x, 0), m[1] = glm::dvec4(y, 0), m[2] = glm::dvec4(z, 0), m[3] = glm::dvec4(eye, 1);
-  return m;
-}
 
 io::Camera make_camera(const std::string& name, glm::dmat4 c2w, std::uint32_t w, std::uint32_t h, double fov_deg) {
   io::Camera c;
@@ -79,7 +69,7 @@ Fixture make_fixture(int res = 48) {
   for (int i = 0; i < 8; ++i) {
     const double az = 2 * kPi * i / 8, el = (i % 2 ? 25.0 : -25.0) * kPi / 180.0;
     const glm::dvec3 eye = kCentre + 3.0 * glm::dvec3(std::cos(el) * std::cos(az), std::sin(el), std::cos(el) * std::sin(az));
-    f.scene.cameras.push_back(make_camera("c" + std::to_string(i), look_at_c2w(eye, kCentre), 96, 80, 40.0));
+    f.scene.cameras.push_back(make_camera("c" + std::to_string(i), test::look_at(eye, kCentre), 96, 80, 40.0));
     f.masks.push_back(sphere_mask(f.scene.cameras.back()));
   }
   neus::OccupancyGrid g;
@@ -229,7 +219,7 @@ TEST_CASE("sample_rays: the same seed gives the same rays, another seed others")
 TEST_CASE("hard case: a camera inside the unit sphere gets near = epsilon and finite rays") {
   Fixture f = make_fixture(32);
   // Inside the object, looking along +x; no mask: all its pixels are "inside".
-  f.scene.cameras.push_back(make_camera("inner", look_at_c2w(kCentre + glm::dvec3(-0.1, 0.05, 0), kCentre + glm::dvec3(1, 0, 0)), 32, 24, 90.0));
+  f.scene.cameras.push_back(make_camera("inner", test::look_at(kCentre + glm::dvec3(-0.1, 0.05, 0), kCentre + glm::dvec3(1, 0, 0)), 32, 24, 90.0));
   f.masks.emplace_back();
   const neus::RayPool pool = neus::build_ray_pool(f.scene, f.masks);
   CHECK(pool.count(8, RayClass::inside) == 32 * 24);

@@ -15,6 +15,7 @@
 #include "engine/io/scene.hpp"
 #include "engine/neus/visual_hull.hpp"
 #include "engine/synth/synth_scene.hpp"
+#include "tests/support/scene_fixtures.hpp"
 
 using namespace nf;
 namespace fs = std::filesystem;
@@ -27,17 +28,6 @@ struct Sphere {
   glm::dvec3 centre;
   double radius;
 };
-
-glm::dmat4 look_at_c2w(glm::dvec3 eye, glm::dvec3 target, glm::dvec3 up = {0, 1, 0}) {
-  const glm::dvec3 z = glm::normalize(eye - target);  // the camera looks down -z
-  glm::dvec3 x = glm::cross(up, z);
-  if (glm::length(x) < 1e-9) x = glm::cross(glm::dvec3(1, 0, 0), z);
-  x = glm::normalize(x);
-  const glm::dvec3 y = glm::cross(z, x);
-  glm::dmat4 m(1.0);
-  m[0] = glm::dvec4(x, 0), m[1] = glm::dvec4(y, 0), m[2] = glm::dvec4(z, 0), m[3] = glm::dvec4(eye, 1);
-  return m;
-}
 
 io::Camera make_camera(const std::string& name, glm::dmat4 c2w, std::uint32_t size, double fov_deg) {
   io::Camera c;
@@ -77,7 +67,7 @@ io::Scene write_sphere_scene(const fs::path& dir, const Sphere& s, int n, double
   for (int i = 0; i < n; ++i) {
     const double az = 2 * kPi * i / n, el = (i % 2 ? 25.0 : -25.0) * kPi / 180.0;
     const glm::dvec3 eye = s.centre + dist * glm::dvec3(std::cos(el) * std::cos(az), std::sin(el), std::cos(el) * std::sin(az));
-    scene.cameras.push_back(make_camera("m" + std::to_string(100 + i).substr(1), look_at_c2w(eye, s.centre), size, 40.0));
+    scene.cameras.push_back(make_camera("m" + std::to_string(100 + i).substr(1), test::look_at(eye, s.centre), size, 40.0));
   }
   for (const io::Camera& c : extra) scene.cameras.push_back(c);
   for (io::Camera& c : scene.cameras) {
@@ -260,9 +250,9 @@ TEST_CASE("visual hull hard cases") {
   SUBCASE("a camera inside the object carves nothing behind it; a close-up (partial view) carves nothing of it") {
     const glm::dvec3 eye = s.centre + glm::dvec3(0.1, 0.05, -0.1);
     const std::vector<io::Camera> extra{
-        make_camera("inside", look_at_c2w(eye, eye + glm::dvec3(1, 0.2, 0.3)), 128, 60.0),
-        make_camera("close", look_at_c2w(s.centre + glm::dvec3(0, 0, 1.2), s.centre), 128, 100.0),
-        make_camera("closeup", look_at_c2w(s.centre + glm::dvec3(0.5, 0.3, 1.8), s.centre + glm::dvec3(0.2, 0, 0)), 128, 30.0)};
+        make_camera("inside", test::look_at(eye, eye + glm::dvec3(1, 0.2, 0.3)), 128, 60.0),
+        make_camera("close", test::look_at(s.centre + glm::dvec3(0, 0, 1.2), s.centre), 128, 100.0),
+        make_camera("closeup", test::look_at(s.centre + glm::dvec3(0.5, 0.3, 1.8), s.centre + glm::dvec3(0.2, 0, 0)), 128, 30.0)};
     const io::Scene with = write_sphere_scene(dir / "inside", s, 10, 3.0, 128, extra);
     // The inside camera's mask is all set, the close-up's touches the border: both are partial views.
     for (const char* name : {"inside", "closeup"}) {

@@ -28,6 +28,18 @@ inline void write_jpeg_header(const std::filesystem::path& p, std::uint32_t w, s
   std::ofstream(p, std::ios::binary).write(reinterpret_cast<const char*>(b), sizeof b);
 }
 
+// Camera-to-world (OpenGL axes: the camera looks down -z) of a camera at `eye` looking at `target`.
+inline glm::dmat4 look_at(glm::dvec3 eye, glm::dvec3 target, glm::dvec3 up = {0, 1, 0}) {
+  const glm::dvec3 z = glm::normalize(eye - target);
+  glm::dvec3 x = glm::cross(up, z);
+  if (glm::length(x) < 1e-9) x = glm::cross(glm::dvec3(1, 0, 0), z);
+  x = glm::normalize(x);
+  const glm::dvec3 y = glm::cross(z, x);
+  glm::dmat4 m(1.0);
+  m[0] = glm::dvec4(x, 0), m[1] = glm::dvec4(y, 0), m[2] = glm::dvec4(z, 0), m[3] = glm::dvec4(eye, 1);
+  return m;
+}
+
 // OpenCV world-to-camera rotation (rows) and translation of a camera.
 inline void opencv_extrinsics(const io::Camera& c, double R[3][3], double t[3]) {
   glm::dmat4 flip(1.0);
