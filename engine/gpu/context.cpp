@@ -141,6 +141,7 @@ ContextOptions ContextOptions::from_env() {
   o.validation = env_flag("NF_VALIDATION");
   o.force_descriptor_pool = env_flag("NF_NO_PUSH_DESCRIPTORS");
   o.force_staging = env_flag("NF_FORCE_STAGING");
+  o.no_shared_float_atomics = env_flag("NF_NO_SHARED_FLOAT_ATOMICS");
   return o;
 }
 

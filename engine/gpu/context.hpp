@@ -20,6 +20,7 @@ struct ContextOptions {
   bool validation = false;             // NF_VALIDATION=1: Khronos validation layer, messages recorded
   bool force_descriptor_pool = false;  // NF_NO_PUSH_DESCRIPTORS=1: exercise the fallback path
   bool force_staging = false;          // NF_FORCE_STAGING=1: no mapped device memory, copy via staging
+  bool no_shared_float_atomics = false;  // NF_NO_SHARED_FLOAT_ATOMICS=1: as if the device lacked them
   static ContextOptions from_env();
 };
 

@@ -46,6 +46,10 @@ void apply_quirks(DeviceInfo& info, DeviceTuning& tuning, const ContextOptions& 
     tuning.mapped_device_buffers = false;
     info.quirks.emplace_back("NF_FORCE_STAGING: staging copies forced");
   }
+  if (options.no_shared_float_atomics && info.features.float32_atomic_add_shared) {
+    info.features.float32_atomic_add_shared = false;  // not enabled on the device either
+    info.quirks.emplace_back("NF_NO_SHARED_FLOAT_ATOMICS: shared-memory float atomics off");
+  }
 }
 
 }  // namespace nf::gpu

@@ -1,7 +1,6 @@
 #include "engine/splat/rasterizer.hpp"
 
 #include <cmath>
-#include <cstdlib>
 
 #include "engine/core/error.hpp"
 #include "engine/core/finite.hpp"
@@ -210,9 +209,8 @@ void StrandRasterizer::backward(gpu::Stream& stream, gpu::BufferRange grad_image
     gpu::ScopedPass pass(stream, "splat/rasterize_bwd");
     const CompositePush cp{camera.width, camera.height, ntx, m.has_body ? 1u : 0u};
     // Shared-memory sums where the device has shared float atomics, subgroup sums elsewhere
-    // (NF_SPLAT_SUBGROUP_SUMS=1 forces the latter so CI runs it).
-    const bool shared_sums = ctx.info().features.float32_atomic_add_shared && !std::getenv("NF_SPLAT_SUBGROUP_SUMS");
-    const char* variant = shared_sums ? "splat/rasterize_bwd:shared" : "splat/rasterize_bwd:subgroup";
+    // (NF_NO_SHARED_FLOAT_ATOMICS=1 takes them away so CI runs the latter).
+    const char* variant = ctx.info().features.float32_atomic_add_shared ? "splat/rasterize_bwd:shared" : "splat/rasterize_bwd:subgroup";
     stream.dispatch(ctx.kernel(variant, {{0, kTile * kTile}}),
                     {m.proj->range(0, segments * kProjected), m.values->range(0, std::max<std::uint64_t>(m.entries, 1)),
                      m.ranges->range(0, std::uint64_t(tiles) * 2), m.body, m.final_t->range(0, pixels),
