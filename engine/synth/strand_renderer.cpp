@@ -96,20 +96,23 @@ StrandRenderer::StrandRenderer(const io::Mesh& body, const BodyLook& body_look, 
   m.body = body;
   m.body_colors = body_look.vertex_colors;
   m.strand_colors = look.root_colors;
-  if (m.body.normals.empty()) throw InputError("renderer: the body mesh needs vertex normals");
+  const bool has_body = body.triangle_count() > 0;  // strands alone are fine (e.g. silhouettes)
+  if (has_body && m.body.normals.size() != body.positions.size()) throw InputError("renderer: the body mesh needs vertex normals");
   m.device = rtcNewDevice(nullptr);
   if (!m.device) throw InternalError("Embree: rtcNewDevice failed (error " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
   m.scene = rtcNewScene(m.device);
   rtcSetSceneBuildQuality(m.scene, RTC_BUILD_QUALITY_MEDIUM);
 
-  RTCGeometry mesh = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  float* vb = static_cast<float*>(rtcSetNewGeometryBuffer(mesh, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), body.vertex_count()));
-  std::copy(body.positions.begin(), body.positions.end(), vb);
-  unsigned* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(mesh, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), body.triangle_count()));
-  std::copy(body.triangles.begin(), body.triangles.end(), ib);
-  rtcCommitGeometry(mesh);
-  rtcAttachGeometryByID(m.scene, mesh, kBodyGeometry);
-  rtcReleaseGeometry(mesh);
+  if (has_body) {
+    RTCGeometry mesh = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    float* vb = static_cast<float*>(rtcSetNewGeometryBuffer(mesh, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), body.vertex_count()));
+    std::copy(body.positions.begin(), body.positions.end(), vb);
+    unsigned* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(mesh, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), body.triangle_count()));
+    std::copy(body.triangles.begin(), body.triangles.end(), ib);
+    rtcCommitGeometry(mesh);
+    rtcAttachGeometryByID(m.scene, mesh, kBodyGeometry);
+    rtcReleaseGeometry(mesh);
+  }
 
   const std::uint32_t n = strands.strand_count();
   if (n > 0) {

@@ -37,6 +37,7 @@ struct Rendered {
   io::Image coverage;  // fraction of samples that hit the animal, 1 channel
 };
 
+// The body may be empty (no triangles): then only the strands are traced.
 class StrandRenderer {
  public:
   StrandRenderer(const io::Mesh& body, const BodyLook& body_look, const io::StrandSet& strands, const StrandLook& look,
