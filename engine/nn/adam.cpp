@@ -51,6 +51,18 @@ Adam::Adam(gpu::Context& context, std::uint64_t parameter_count, const AdamConfi
   reset();
 }
 
+Adam::State Adam::save_state() const { return {m_->download(), v_->download(), state_->download()}; }
+
+void Adam::load_state(const State& state) {
+  if (state.m.size() != count_ || state.v.size() != count_ || state.words.size() != kStateWords)
+    throw InputError("optimiser state holds " + std::to_string(state.m.size()) + " moments and " +
+                     std::to_string(state.words.size()) + " counters; expected " + std::to_string(count_) + " and " +
+                     std::to_string(kStateWords));
+  m_->upload(state.m);
+  v_->upload(state.v);
+  state_->upload(state.words);
+}
+
 void Adam::reset() {
   m_->fill_u32(0);
   v_->fill_u32(0);

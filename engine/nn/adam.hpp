@@ -49,6 +49,14 @@ class Adam {
   Counters counters() const;
   void reset();
 
+  // Moments and counters, for checkpoints: a resumed run continues exactly where it stopped.
+  struct State {
+    std::vector<float> m, v;
+    std::vector<std::uint32_t> words;
+  };
+  State save_state() const;
+  void load_state(const State& state);  // throws InputError when the sizes do not match
+
  private:
   gpu::Context& context_;
   std::uint64_t count_;

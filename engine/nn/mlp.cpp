@@ -15,6 +15,7 @@ constexpr std::uint32_t kWorkgroup = 64;
 constexpr std::uint32_t kPreferredColumns = 16;  // output rows per invocation in mlp_forward
 constexpr std::uint32_t kSlabItems = 32;  // samples per invocation in mlp_backward_weights
 constexpr std::uint32_t kSlab = kWorkgroup * kSlabItems;
+constexpr std::uint32_t kWeightBlock = 2;  // mlp_backward_weights: up to 8 x 8 gradient entries per invocation
 constexpr std::uint32_t kMaxInferenceChunk = 1u << 16;
 
 struct ForwardPush {
@@ -143,7 +144,6 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
   if (grad_input.size) gpu::require_bytes(grad_input, std::uint64_t(batch) * input_stride() * 4, "mlp input gradient");
   const gpu::Kernel& act = context_.kernel("nn/mlp_activation_backward", {{0, 256}});
   const gpu::Kernel& transpose = context_.kernel("nn/mlp_transpose", {{0, 256}});
-  const gpu::Kernel& weights = context_.kernel("nn/mlp_backward_weights", {{0, kWorkgroup}, {1, kSlabItems}});
   const gpu::Kernel& reduce = context_.kernel("nn/mlp_reduce_partials", {{0, 256}});
   const std::uint32_t slabs = (batch + kSlab - 1) / kSlab;
   gpu::BufferRange grad_y = grad_output;
@@ -158,7 +158,11 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
                                            l.activation.beta, l.activation.omega},
                     gpu::Elements(count));
     const gpu::BufferRange x = li == 0 ? input : ws.y_[li - 1]->whole();
-    const std::uint32_t blocks = (l.out_stride / 4) * (l.in_stride / 4 + 1);
+    // Narrow layers (one output vec4) would waste half of a two-vec4 block.
+    const std::uint32_t bo = l.out_stride / 4 >= kWeightBlock ? kWeightBlock : 1, bk = kWeightBlock;
+    const gpu::Kernel& weights =
+        context_.kernel("nn/mlp_backward_weights", {{0, kWorkgroup}, {1, kSlabItems}, {2, bo}, {3, bk}});
+    const std::uint32_t blocks = ((l.out_stride / 4 + bo - 1) / bo) * ((l.in_stride / 4 + 1 + bk - 1) / bk);
     const std::uint32_t per_group = std::max(1u, (blocks + 31) / 32);
     stream.dispatch_groups(weights, {dz, x, ws.partials_->whole()},
                            BackwardWeightsPush{batch, l.in_stride / 4, l.out_stride / 4, l.out, per_group},

@@ -8,11 +8,12 @@ layout(push_constant) uniform Push {
   uint levels;
   uint features;
   uint log2_table;
-  uint out_stride;
+  uint out_stride;       // row length of the encoded rows
   uint dense_mask;       // bit l: level l indexes its table directly
   uint has_grad_points;  // backward: also write dL/dpoints
   uint accumulate_points;
   uint resolution[16];
+  uint out_offset;  // first column of the encoding in its rows
 } pc;
 
 uint nf_hash_grid_index(uint level, uvec3 v) {

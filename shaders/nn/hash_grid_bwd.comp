@@ -47,7 +47,7 @@ void main() {
     vec3 frac;
     nf_hash_grid_cell(x, n, cell, frac);
     vec4 g = vec4(0.0);
-    for (uint f = 0u; f < pc.features; ++f) g[f] = grad[s * pc.out_stride + l * pc.features + f];
+    for (uint f = 0u; f < pc.features; ++f) g[f] = grad[s * pc.out_stride + pc.out_offset + l * pc.features + f];
     const bool dense = (pc.dense_mask & (1u << l)) != 0u;
     for (uint corner = 0u; corner < 8u; ++corner) {
       const uvec3 up = uvec3(corner & 1u, (corner >> 1) & 1u, (corner >> 2) & 1u);

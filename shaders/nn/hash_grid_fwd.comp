@@ -29,7 +29,7 @@ void main() {
       const uint e = (l * table_size + nf_hash_grid_index(l, cell + up)) * pc.features;
       for (uint f = 0u; f < pc.features; ++f) acc[f] += w * table[e + f];
     }
-    for (uint f = 0u; f < pc.features; ++f) encoded[s * pc.out_stride + l * pc.features + f] = acc[f];
+    for (uint f = 0u; f < pc.features; ++f) encoded[s * pc.out_stride + pc.out_offset + l * pc.features + f] = acc[f];
   }
-  for (uint i = pc.levels * pc.features; i < pc.out_stride; ++i) encoded[s * pc.out_stride + i] = 0.0;
+  for (uint i = pc.out_offset + pc.levels * pc.features; i < pc.out_stride; ++i) encoded[s * pc.out_stride + i] = 0.0;
 }
