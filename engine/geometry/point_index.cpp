@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <exception>
+#include <atomic>
+#include <mutex>
 #include <thread>
 
 #include "engine/core/error.hpp"
@@ -81,6 +83,29 @@ void parallel_for(std::size_t count, const std::function<void(std::size_t, std::
   for (auto& th : pool) th.join();
   for (auto& e : errors)
     if (e) std::rethrow_exception(e);
+}
+
+void for_each_dynamic(int count, const std::function<void(int)>& body) {
+  const int threads = std::max(1, std::min<int>(int(std::thread::hardware_concurrency()), count));
+  std::atomic<int> next{0};
+  std::exception_ptr error;
+  std::mutex error_mutex;
+  const auto worker = [&] {
+    for (int k = next++; k < count; k = next++) {
+      try {
+        body(k);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(error_mutex);
+        if (!error) error = std::current_exception();
+        next = count;
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
+  worker();
+  for (auto& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
 }
 
 }  // namespace nf::geometry
