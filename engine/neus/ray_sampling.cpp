@@ -106,40 +106,42 @@ RayPool build_ray_pool(const io::Scene& scene, const std::vector<std::vector<std
   return pool;
 }
 
-bool ray_interval(const glm::dvec3& o, const glm::dvec3& d, const Normalisation& norm, const OccupancyGrid* hull,
-                  double near_epsilon, double& near_t, double& far_t) {
-  near_t = far_t = 0.0;
-  // The unit sphere: |o + t d|^2 = 1 with |d| = 1.
+namespace {
+
+// The ray's part inside the unit sphere, near clamped to >= near_epsilon; false when missed.
+bool sphere_interval(const glm::dvec3& o, const glm::dvec3& d, double near_epsilon, double& t0, double& t1) {
+  // |o + t d|^2 = 1 with |d| = 1.
   const double b = glm::dot(o, d), c = glm::dot(o, o) - 1.0, disc = b * b - c;
   if (!(disc > 0.0)) return false;
   const double s = std::sqrt(disc);
-  double t0 = std::max(-b - s, near_epsilon), t1 = -b + s;
-  if (!(t1 > t0)) return false;
-  if (hull == nullptr) {
-    near_t = t0, far_t = t1;
-    return true;
-  }
-  if (hull->dims.x <= 0 || hull->dims.y <= 0 || hull->dims.z <= 0) return false;
-  // The grid in unit coordinates.
-  const glm::dvec3 lo = norm.to_unit(hull->lo), cs = hull->cell_size() * norm.scale;
-  const glm::dvec3 hi = lo + cs * glm::dvec3(hull->dims);
+  t0 = std::max(-b - s, near_epsilon), t1 = -b + s;
+  return t1 > t0;
+}
+
+// Amanatides-Woo through the grid (world box mapped to unit coordinates) over [t0, t1]: calls
+// visit(enter, exit) for every occupied cell crossed, in order.
+template <class Visit>
+void walk_occupied_cells(const glm::dvec3& o, const glm::dvec3& d, const Normalisation& norm, const OccupancyGrid& grid,
+                         double t0, double t1, Visit&& visit) {
+  if (grid.dims.x <= 0 || grid.dims.y <= 0 || grid.dims.z <= 0) return;
+  const glm::dvec3 lo = norm.to_unit(grid.lo), cs = grid.cell_size() * norm.scale;
+  const glm::dvec3 hi = lo + cs * glm::dvec3(grid.dims);
   constexpr double kInf = std::numeric_limits<double>::infinity();
   for (int a = 0; a < 3; ++a) {  // slabs
     if (d[a] == 0.0) {
-      if (o[a] < lo[a] || o[a] > hi[a]) return false;
+      if (o[a] < lo[a] || o[a] > hi[a]) return;
       continue;
     }
     double ta = (lo[a] - o[a]) / d[a], tb = (hi[a] - o[a]) / d[a];
     if (ta > tb) std::swap(ta, tb);
     t0 = std::max(t0, ta), t1 = std::min(t1, tb);
   }
-  if (!(t1 > t0)) return false;
-  // Amanatides-Woo from t0 to t1.
+  if (!(t1 > t0)) return;
   const glm::dvec3 g = (o + t0 * d - lo) / cs;
   glm::ivec3 cell, step;
   glm::dvec3 t_max, t_delta;
   for (int a = 0; a < 3; ++a) {
-    cell[a] = std::clamp(int(std::floor(g[a])), 0, hull->dims[a] - 1);
+    cell[a] = std::clamp(int(std::floor(g[a])), 0, grid.dims[a] - 1);
     if (d[a] > 0.0) {
       step[a] = 1, t_delta[a] = cs[a] / d[a], t_max[a] = (lo[a] + (cell[a] + 1) * cs[a] - o[a]) / d[a];
     } else if (d[a] < 0.0) {
@@ -148,22 +150,73 @@ bool ray_interval(const glm::dvec3& o, const glm::dvec3& d, const Normalisation&
       step[a] = 0, t_delta[a] = kInf, t_max[a] = kInf;
     }
   }
-  double t = t0, first = -1.0, last = -1.0;
+  double t = t0;
   while (t < t1) {
     const int a = t_max.x <= t_max.y ? (t_max.x <= t_max.z ? 0 : 2) : (t_max.y <= t_max.z ? 1 : 2);
     const double exit = std::min(t_max[a], t1);
-    if (hull->at(cell.x, cell.y, cell.z)) {
-      if (first < 0.0) first = t;
-      last = exit;
-    }
+    if (grid.at(cell.x, cell.y, cell.z) && exit > t) visit(t, exit);
     t = std::max(t, exit);
     cell[a] += step[a];
-    if (cell[a] < 0 || cell[a] >= hull->dims[a]) break;
+    if (cell[a] < 0 || cell[a] >= grid.dims[a]) break;
     t_max[a] += t_delta[a];
   }
+}
+
+}  // namespace
+
+bool ray_interval(const glm::dvec3& o, const glm::dvec3& d, const Normalisation& norm, const OccupancyGrid* hull,
+                  double near_epsilon, double& near_t, double& far_t) {
+  near_t = far_t = 0.0;
+  double t0 = 0.0, t1 = 0.0;
+  if (!sphere_interval(o, d, near_epsilon, t0, t1)) return false;
+  if (hull == nullptr) {
+    near_t = t0, far_t = t1;
+    return true;
+  }
+  double first = -1.0, last = -1.0;
+  walk_occupied_cells(o, d, norm, *hull, t0, t1, [&](double enter, double exit) {
+    if (first < 0.0) first = enter;
+    last = exit;
+  });
   if (first < 0.0 || !(last > first)) return false;
   near_t = first, far_t = last;
   return true;
+}
+
+std::vector<Segment> occupied_segments(const glm::dvec3& o, const glm::dvec3& d, const Normalisation& norm,
+                                       const OccupancyGrid& grid, double near_epsilon) {
+  std::vector<Segment> segments;
+  double t0 = 0.0, t1 = 0.0, last_exit = -1.0;
+  if (!sphere_interval(o, d, near_epsilon, t0, t1)) return segments;
+  walk_occupied_cells(o, d, norm, grid, t0, t1, [&](double enter, double exit) {
+    if (!segments.empty() && enter <= last_exit + 1e-9)
+      segments.back().far = float(exit);  // cells in a row make one segment
+    else
+      segments.push_back({float(enter), float(exit)});
+    last_exit = exit;
+  });
+  return segments;
+}
+
+void stratified_samples(const std::vector<Segment>& segments, std::uint32_t count, float jitter,
+                        std::vector<float>& t, std::vector<float>& dist) {
+  t.clear();
+  dist.clear();
+  double total = 0.0;
+  for (const Segment& s : segments) total += double(s.far) - double(s.near);
+  if (count == 0 || !(total > 0.0)) return;
+  const double step = total / count;
+  std::size_t seg = 0;
+  double before = 0.0;  // length of the segments before `seg`
+  for (std::uint32_t j = 0; j < count; ++j) {
+    const double u = (j + double(jitter)) * step;
+    while (seg + 1 < segments.size() && u >= before + (double(segments[seg].far) - double(segments[seg].near))) {
+      before += double(segments[seg].far) - double(segments[seg].near);
+      ++seg;
+    }
+    t.push_back(float(double(segments[seg].near) + (u - before)));
+    dist.push_back(float(step));
+  }
 }
 
 std::vector<Ray> sample_rays(const RayPool& pool, const io::Scene& scene, const Normalisation& norm,
@@ -241,6 +294,56 @@ std::vector<Ray> sample_rays(const RayPool& pool, const io::Scene& scene, const 
     }
   }
   return rays;
+}
+
+std::vector<float> upsample_positions(const std::vector<float>& t, const std::vector<float>& sdf, float max_gap,
+                                      float inv_s, std::uint32_t count, float jitter) {
+  std::vector<float> out;
+  const std::size_t n = t.size();
+  if (count == 0 || n < 2 || sdf.size() != n) return out;
+  const auto sigmoid = [](double x) { return x >= 0 ? 1.0 / (1.0 + std::exp(-x)) : std::exp(x) / (1.0 + std::exp(x)); };
+  std::vector<double> weight(n - 1, 0.0);
+  double transmittance = 1.0, previous_cos = 0.0, total = 0.0;
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    const double dist = double(t[i + 1]) - double(t[i]);
+    if (!(dist > 0.0) || dist > max_gap || !std::isfinite(sdf[i]) || !std::isfinite(sdf[i + 1])) {
+      previous_cos = 0.0;
+      continue;
+    }
+    const double mid = 0.5 * (double(sdf[i]) + double(sdf[i + 1]));
+    double cos = (double(sdf[i + 1]) - double(sdf[i])) / (dist + 1e-5);
+    cos = std::clamp(std::min(cos, previous_cos), -1e3, 0.0);
+    previous_cos = (double(sdf[i + 1]) - double(sdf[i])) / (dist + 1e-5);
+    const double prev = mid - cos * dist * 0.5, next = mid + cos * dist * 0.5;
+    const double p = sigmoid(prev * inv_s), c = sigmoid(next * inv_s);
+    const double alpha = std::clamp((p - c + 1e-5) / (p + 1e-5), 0.0, 1.0);
+    weight[i] = alpha * transmittance + 1e-5 * dist;  // a floor keeps every occupied interval reachable
+    transmittance *= 1.0 - alpha + 1e-7;
+    total += weight[i];
+  }
+  if (!(total > 0.0)) return out;
+  out.reserve(count);
+  std::size_t i = 0;
+  double before = 0.0;  // cumulative weight before interval i
+  for (std::uint32_t j = 0; j < count; ++j) {
+    const double u = (j + double(jitter)) / count * total;
+    while (i + 2 < n && before + weight[i] <= u) before += weight[i++];
+    const double f = weight[i] > 0.0 ? std::clamp((u - before) / weight[i], 0.0, 1.0) : 0.5;
+    out.push_back(float(double(t[i]) + f * (double(t[i + 1]) - double(t[i]))));
+  }
+  return out;
+}
+
+void merge_samples(const std::vector<float>& a, const std::vector<float>& b, float max_section, std::vector<float>& t,
+                   std::vector<float>& dist) {
+  t.resize(a.size() + b.size());
+  std::merge(a.begin(), a.end(), b.begin(), b.end(), t.begin());
+  dist.assign(t.size(), 0.f);
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    const float before = k > 0 ? std::min(0.5f * (t[k] - t[k - 1]), 0.5f * max_section) : 0.5f * max_section;
+    const float after = k + 1 < t.size() ? std::min(0.5f * (t[k + 1] - t[k]), 0.5f * max_section) : 0.5f * max_section;
+    dist[k] = before + after;
+  }
 }
 
 }  // namespace nf::neus

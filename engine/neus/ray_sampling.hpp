@@ -84,4 +84,36 @@ std::vector<Ray> sample_rays(const RayPool& pool, const io::Scene& scene, const 
 bool ray_interval(const glm::dvec3& origin, const glm::dvec3& direction, const Normalisation& norm,
                   const OccupancyGrid* hull, double near_epsilon, double& near, double& far);
 
+// A stretch [near, far] of a ray (unit coordinates) through occupied cells.
+struct Segment {
+  float near = 0.f, far = 0.f;
+};
+
+// The ray's stretches inside the unit sphere (near >= near_epsilon) through occupied cells of
+// `grid` (world box, mapped through `norm`), adjacent cells merged, in order along the ray.
+std::vector<Segment> occupied_segments(const glm::dvec3& origin, const glm::dvec3& direction, const Normalisation& norm,
+                                       const OccupancyGrid& grid, double near_epsilon);
+
+// `count` stratified samples over the segments as if laid end to end: sample j at
+// (j + jitter) / count of the total length, jitter in [0, 1). Each sample stands for an interval
+// of length total / count (`dist`); gaps between segments are empty space and get no samples.
+// Empty outputs when the segments have no length.
+void stratified_samples(const std::vector<Segment>& segments, std::uint32_t count, float jitter,
+                        std::vector<float>& t, std::vector<float>& dist);
+
+// NeuS up-sampling (the official code's up_sample, one round): from a ray's coarse positions t
+// (ascending) and the SDF there, the NeuS weights at inverse variance inv_s (interval cosines from
+// SDF differences, min with the previous interval's, clipped to [-1e3, 0]) are sampled by inverse
+// CDF at `count` stratified points ((j + jitter) / count). Intervals longer than max_gap span a gap
+// between occupied segments and get no weight. Returns ascending positions (empty when count is 0
+// or fewer than two coarse samples).
+std::vector<float> upsample_positions(const std::vector<float>& t, const std::vector<float>& sdf, float max_gap,
+                                      float inv_s, std::uint32_t count, float jitter);
+
+// The sorted union of two position sets, each sample's section being half-way to its neighbours
+// (so sections tile the sampled stretches), capped at max_section (gaps are empty space); the end
+// samples extend half of max_section outwards.
+void merge_samples(const std::vector<float>& a, const std::vector<float>& b, float max_section, std::vector<float>& t,
+                   std::vector<float>& dist);
+
 }  // namespace nf::neus

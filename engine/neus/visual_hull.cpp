@@ -1,16 +1,13 @@
 #include "engine/neus/visual_hull.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
-#include <exception>
 #include <functional>
-#include <mutex>
-#include <thread>
 
 #include "engine/core/error.hpp"
 #include "engine/core/log.hpp"
+#include "engine/geometry/point_index.hpp"
 #include "engine/io/image.hpp"
 
 namespace nf::neus {
@@ -62,31 +59,6 @@ std::vector<std::uint8_t> dilate_mask(const std::vector<std::uint8_t>& m, int w,
       out[std::size_t(y) * std::size_t(w) + std::size_t(x)] = v;
     }
   return out;
-}
-
-// Runs body(k) for k in [0, count) on all cores, handing out items one at a time (z-slabs differ a
-// lot in cost: the occupied ones test every camera). Rethrows the first exception on this thread.
-void for_each_dynamic(int count, const std::function<void(int)>& body) {
-  const int threads = std::max(1, std::min<int>(int(std::thread::hardware_concurrency()), count));
-  std::atomic<int> next{0};
-  std::exception_ptr error;
-  std::mutex error_mutex;
-  const auto worker = [&] {
-    for (int k = next++; k < count; k = next++) {
-      try {
-        body(k);
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(error_mutex);
-        if (!error) error = std::current_exception();
-        next = count;
-      }
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& t : pool) t.join();
-  if (error) std::rethrow_exception(error);
 }
 
 enum class Verdict { Unseen, Carved, Kept };
@@ -142,7 +114,7 @@ std::vector<std::uint8_t> carve(const std::vector<View>& views, glm::dvec3 lo, g
                                 int min_views) {
   std::vector<std::uint8_t> occ(std::size_t(dims.x) * std::size_t(dims.y) * std::size_t(dims.z), 0);
   const CellTest test{views, lo, cell, min_views};
-  for_each_dynamic(dims.z, [&](int k) {
+  geometry::for_each_dynamic(dims.z, [&](int k) {
     for (int j = 0; j < dims.y; ++j)
       for (int i = 0; i < dims.x; ++i) {
         const glm::dvec3 corner0 = lo + glm::dvec3(i, j, k) * cell;
@@ -170,7 +142,7 @@ std::vector<std::uint8_t> carve(const std::vector<View>& views, glm::dvec3 lo, g
   std::vector<std::uint64_t> sole(views.size(), 0), total(views.size(), 0);
   std::uint64_t seen_cells = 0;
   std::mutex mutex;
-  for_each_dynamic(dims.z, [&](int k) {
+  geometry::for_each_dynamic(dims.z, [&](int k) {
     std::vector<std::uint64_t> s(views.size(), 0), t(views.size(), 0);
     std::uint64_t sc = 0;
     for (int j = 0; j < dims.y; ++j)
@@ -296,7 +268,7 @@ OccupancyGrid carve_visual_hull(const io::Scene& scene, const VisualHullOptions&
     throw InputError(source + ": no camera has a mask; the visual hull (and the NeuS stage) needs masks "
                               "(mask_path per frame in transforms.json)");
   std::vector<View> views(masked.size());
-  for_each_dynamic(int(masked.size()), [&](int vi) {
+  geometry::for_each_dynamic(int(masked.size()), [&](int vi) {
     const io::Camera& cam = scene.cameras[masked[std::size_t(vi)]];
     const io::Image image = io::read_image(cam.mask);
     if (image.width != cam.width || image.height != cam.height)
@@ -313,6 +285,9 @@ OccupancyGrid carve_visual_hull(const io::Scene& scene, const VisualHullOptions&
       v.full_view = !raw[std::size_t(x)] && !raw[std::size_t(v.height - 1) * std::size_t(v.width) + std::size_t(x)];
     for (int y = 0; y < v.height && v.full_view; ++y)
       v.full_view = !raw[std::size_t(y) * std::size_t(v.width)] && !raw[std::size_t(y) * std::size_t(v.width) + std::size_t(v.width - 1)];
+    // An empty mask says only that nothing lies in this camera's view, not that the animal is in
+    // it: it carves what it sees (a partial view), never what lies outside its image.
+    if (std::none_of(raw.begin(), raw.end(), [](std::uint8_t m) { return m != 0; })) v.full_view = false;
     const std::vector<std::uint8_t> m = dilate_mask(raw, v.width, v.height, options.dilate_px);
     v.sat.assign(std::size_t(v.width + 1) * std::size_t(v.height + 1), 0);
     for (int y = 0; y < v.height; ++y) {

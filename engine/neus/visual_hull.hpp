@@ -62,8 +62,9 @@ struct VisualHullOptions {
 //  - Full and partial views: a mask that touches no image border shows the whole object (a full
 //    view), so cells projecting outside that image or lying behind that camera are carved, as in
 //    the classic visual hull. A mask touching the border (the object cut off, a camera inside or
-//    very close to the object) is a partial view: it carves only cells wholly in front of it whose
-//    projection lies wholly inside its image.
+//    very close to the object) and an empty mask (a camera that sees nothing of the animal) make
+//    a partial view: it carves only cells wholly in front of it whose projection lies wholly
+//    inside its image.
 //  - Conservative test: a camera carves a cell only when all 8 corners lie in front of it and no
 //    pixel touched by the bounding rectangle of the 8 projected corners (which contains the
 //    projected cube, a convex polytope) is set in the dilated mask. So a cell is kept when any
