@@ -16,6 +16,7 @@
 #include "engine/metrics/surface_metrics.hpp"
 #include "engine/synth/preview.hpp"
 #include "engine/orient/scene_orientation.hpp"
+#include "engine/pipeline/stages.hpp"
 #include "engine/synth/synth_scene.hpp"
 
 namespace {
@@ -182,6 +183,24 @@ int run_bench(const nf::bench::Options& options, const std::string& json_path, b
   return 0;
 }
 
+int run_reconstruct(const nf::pipeline::ReconstructOptions& options, bool as_json, bool profile) {
+  nf::gpu::Context context;
+  const auto outcomes = nf::pipeline::reconstruct(context, options);
+  if (profile) print_profile(context);
+  if (as_json) {
+    json out = json::array();
+    for (const auto& o : outcomes)
+      out.push_back({{"stage", o.name}, {"ran", o.ran}, {"seconds", o.seconds}, {"summary", o.summary}});
+    std::cout << out.dump(2) << "\n";
+    return 0;
+  }
+  for (const auto& o : outcomes)
+    std::printf("%-10s %s%s\n", o.name.c_str(), o.ran ? "ran in " : "unchanged, skipped",
+                o.ran ? (std::to_string(o.seconds) + " s").c_str() : "");
+  std::printf("outputs in %s\n", options.work.string().c_str());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -255,6 +274,19 @@ int main(int argc, char** argv) {
   orient->add_option("--out", orient_out, "output folder: <camera>.exr and <camera>.png per view")->required();
   orient->add_option("--views", orient_options.views, "'all' (default) or camera indices like 0,5,9");
 
+  nf::pipeline::ReconstructOptions reconstruct_options;
+  bool reconstruct_json = false;
+  std::string reconstruct_scene, reconstruct_out;
+  auto* reconstruct = app.add_subcommand("reconstruct", "the method stage by stage (cached and resumable): surface (neus), ...");
+  reconstruct->add_option("--scene", reconstruct_scene, "scene folder or transforms.json (any format nf_gpu reads)")->required();
+  reconstruct->add_option("--out", reconstruct_out, "WORK folder: one sub-folder per stage (created if needed)")->required();
+  reconstruct->add_option("--quality", reconstruct_options.quality, "draft, default or paper (default: default)")
+      ->check(CLI::IsMember({"draft", "default", "paper"}));
+  reconstruct->add_option("--from", reconstruct_options.run.from, "rerun from this stage even when unchanged");
+  reconstruct->add_option("--to", reconstruct_options.run.to, "stop after this stage");
+  reconstruct->add_option("--set", reconstruct_options.settings, "override a stage setting: stage.key=value (repeatable)");
+  reconstruct->add_flag("--json", reconstruct_json, "machine-readable summary");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -268,6 +300,10 @@ int main(int argc, char** argv) {
     if (*bench) return run_bench(bench_options, bench_json, profile);
     if (*metrics) return run_metrics(metrics_options);
     if (*synth) return run_synth(synth_out, synth_options);
+    if (*reconstruct) {
+      reconstruct_options.scene = reconstruct_scene, reconstruct_options.work = reconstruct_out;
+      return run_reconstruct(reconstruct_options, reconstruct_json, profile);
+    }
     if (*orient) {
       orient_options.scene = orient_scene, orient_options.out = orient_out;
       return run_orient(orient_options);

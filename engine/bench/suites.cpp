@@ -1,6 +1,7 @@
 #include "engine/bench/suites.hpp"
 
 #include "engine/bench/core_suite.hpp"
+#include "engine/bench/neus_suite.hpp"
 #include "engine/bench/nn_suite.hpp"
 #include "engine/bench/splat_suite.hpp"
 #include "engine/core/atomic_file.hpp"
@@ -8,12 +9,13 @@
 
 namespace nf::bench {
 
-std::vector<std::string> suite_names() { return {"core", "nn", "splat"}; }
+std::vector<std::string> suite_names() { return {"core", "nn", "splat", "neus"}; }
 
 json run_suite(gpu::Context& context, const Options& options) {
   if (options.suite == "core") return run_core_suite(context, options);
   if (options.suite == "nn") return run_nn_suite(context, options);
   if (options.suite == "splat") return run_splat_suite(context, options);
+  if (options.suite == "neus") return run_neus_suite(context, options);
   throw UsageError("unknown bench suite '" + options.suite + "'");
 }
 

@@ -163,3 +163,40 @@ TEST_CASE("nf_gpu synth, orient and render chain on a tiny scene; bad views exit
   CHECK(run("synth --animal unicorn --out " + (dir / "u").string()).code == 2);
   std::filesystem::remove_all(dir);
 }
+
+TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cached, with clear refusals") {
+  namespace fs = std::filesystem;
+  const fs::path root = fs::temp_directory_path() / "nf_cli_reconstruct";
+  fs::remove_all(root);
+  const fs::path scene = root / "scene", work = root / "work";
+  REQUIRE(run("synth --animal cat --views 8 --res 64 --strands 4000 --spp-axis 1 --out " + scene.string()).code == 0);
+  const std::string tiny = " --quality draft --set neus.steps=12 --set neus.rays=128 --set neus.samples_per_ray=16 --set neus.fine_samples=8"
+                           " --set neus.hull_fit_steps=5 --set neus.mesh_resolution=48 --set neus.hull_resolution=48";
+  const Result first = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny);
+  INFO(first.output);
+  REQUIRE(first.code == 0);
+  for (const char* f : {"neus/outer.ply", "neus/model.nfwt", "neus/normalisation.json", "neus/metrics.json",
+                        "neus/training.jsonl", "neus/stage.json", "neus/renders/007_rgb.png", "neus/renders/007_depth.exr"})
+    CHECK_MESSAGE(fs::exists(work / f), f);
+  const nf::io::Mesh mesh = nf::io::read_mesh(work / "neus" / "outer.ply");
+  CHECK(mesh.triangle_count() > 100);
+  std::ifstream metrics(work / "neus" / "metrics.json");
+  const nf::json m = nf::json::parse(metrics);
+  CHECK(m["steps"] == 12);
+  CHECK(m.contains("ground_truth"));  // a synth scene: chamfer against gt/outer.ply
+  CHECK(m["held_out"]["views"].size() == 1);
+
+  const Result again = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + " --json");
+  REQUIRE(again.code == 0);
+  REQUIRE(again.output.find('[') != std::string::npos);
+  const nf::json outcome = nf::json::parse(again.output.substr(again.output.find('[')));
+  CHECK(outcome[0]["stage"] == "neus");
+  CHECK(outcome[0]["ran"] == false);  // unchanged: skipped
+
+  CHECK(run("reconstruct --scene " + scene.string() + " --out " + (scene / "work").string() + tiny).code == 2);
+  CHECK(run("reconstruct --scene " + scene.string() + " --out " + work.string() + " --set body.steps=3").code == 2);
+  const Result bad = run("reconstruct --scene " + scene.string() + " --out " + work.string() + " --set neus.colour=3");
+  CHECK(bad.code == 1);
+  CHECK(bad.output.find("neus setting 'colour' is unknown") != std::string::npos);
+  fs::remove_all(root);
+}

@@ -1,0 +1,44 @@
+#pragma once
+// A stage of `nf_gpu reconstruct` (DESIGN §1): it names the files it reads and the parameters that
+// change its result, and writes its outputs into a folder the framework gives it. Everything else
+// (hashing, skipping, atomic replacement, resume folders, records) is the framework's
+// (pipeline.hpp), so adding a stage is writing one of these and listing it in stages.cpp.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "engine/core/json.hpp"
+#include "engine/io/scene.hpp"
+
+namespace nf::gpu {
+class Context;
+}
+
+namespace nf::pipeline {
+
+struct StageContext {
+  gpu::Context& gpu;
+  std::filesystem::path scene_dir;  // the input scene (never written)
+  io::Scene scene;                  // read once
+  std::filesystem::path work;       // WORK: one folder per stage
+  std::string quality;              // draft | default | paper
+  json settings = json::object();   // per-stage overrides of the preset: {"neus": {"steps": 500}}
+};
+
+class Stage {
+ public:
+  virtual ~Stage() = default;
+  virtual std::string name() const = 0;
+  // Stages whose outputs this one reads (they run first).
+  virtual std::vector<std::string> depends_on() const { return {}; }
+  // Files read (scene files, or earlier stages' outputs under WORK); their content is hashed.
+  virtual std::vector<std::filesystem::path> inputs(const StageContext& context) const = 0;
+  // Everything else that changes the result (settings, camera parameters, a version).
+  virtual json parameters(const StageContext& context) const = 0;
+  // Writes the outputs into `out` (a fresh folder that becomes WORK/<name> when this returns).
+  // `resume` survives a killed run (checkpoints) and is emptied once the stage has finished.
+  // Returns a summary for the stage record: what it cost and what it achieved.
+  virtual json run(StageContext& context, const std::filesystem::path& out, const std::filesystem::path& resume) = 0;
+};
+
+}  // namespace nf::pipeline
