@@ -197,7 +197,8 @@ TEST_CASE("NeuS training converges on a rendered capsule, from the sphere and fr
   SUBCASE("sphere initialisation, rendering losses only") {
     const Outcome r = train_and_measure(data, cap, small_options(100, 0));
     CHECK(r.last_loss < 0.6 * r.first_loss);
-    CHECK(r.chamfer_pct < 0.8 * r.initial_chamfer_pct);  // slower than from the hull, but learning
+    CHECK(r.chamfer_pct < 1.5);
+    CHECK(r.chamfer_pct < r.hull_chamfer_pct);
   }
   SUBCASE("hull fit, then rendering") {
     const Outcome r = train_and_measure(data, cap, small_options(100, 40));
