@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "engine/core/atomic_file.hpp"
+#include "engine/core/content_hash.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/finite.hpp"
 #include "engine/core/stats.hpp"
@@ -67,4 +68,19 @@ TEST_CASE("errors carry the exit code of their kind") {
   CHECK(UsageError("x").code() == ExitCode::Usage);
   CHECK(DeviceError("x").code() == ExitCode::DeviceOrInternal);
   CHECK_THROWS_WITH_AS(NF_CHECK(1 + 1 == 3, "arithmetic"), doctest::Contains("arithmetic"), InternalError);
+}
+
+TEST_CASE("content hashes: equal bytes hash equal, one changed byte changes the hash, unreadable files are named") {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "nf_core_hash";
+  fs::create_directories(dir);
+  std::ofstream(dir / "a.bin", std::ios::binary) << "whiskers";
+  std::ofstream(dir / "b.bin", std::ios::binary) << "whiskers";
+  std::ofstream(dir / "c.bin", std::ios::binary) << "whiskerS";
+  CHECK(nf::hash_file(dir / "a.bin") == nf::hash_file(dir / "b.bin"));
+  CHECK(nf::hash_file(dir / "a.bin") == nf::hash_bytes("whiskers"));
+  CHECK(nf::hash_file(dir / "a.bin") != nf::hash_file(dir / "c.bin"));
+  CHECK(nf::hash_bytes("").size() == 16);
+  CHECK_THROWS_WITH_AS(nf::hash_file(dir / "missing.bin"), doctest::Contains("missing.bin"), nf::InputError);
+  fs::remove_all(dir);
 }

@@ -95,3 +95,27 @@ TEST_CASE("parameter groups outside the parameters are rejected") {
   CHECK_THROWS_WITH_AS(Adam(ctx, 10, {}, {{5, 6, 1.f, 0.f}}), doctest::Contains("outside the 10 parameters"),
                        InputError);
 }
+
+TEST_CASE("optimiser state saved and loaded continues bit for bit; a wrong size is refused") {
+  auto& ctx = test::context();
+  const std::uint64_t n = 257;
+  const auto grads = test::random_f32(n, 9);
+  const auto start = test::random_f32(n, 10);
+  gpu::Buffer<float> g(ctx, std::span<const float>(grads), "grads");
+  gpu::Buffer<float> a(ctx, std::span<const float>(start), "a"), b(ctx, n, "b");
+  gpu::Stream s(ctx);
+  Adam first(ctx, n, {}, {});
+  for (int i = 0; i < 3; ++i) first.step(s, a, g, 1e-2f);
+  s.submit_and_wait();
+  Adam second(ctx, n, {}, {});
+  second.load_state(first.save_state());
+  b.upload(a.download());
+  first.step(s, a, g, 1e-2f);
+  second.step(s, b, g, 1e-2f);
+  s.submit_and_wait();
+  CHECK(a.download() == b.download());
+  CHECK(second.counters().taken == 4);
+  Adam::State wrong = first.save_state();
+  wrong.m.pop_back();
+  CHECK_THROWS_AS(second.load_state(wrong), InputError);
+}
