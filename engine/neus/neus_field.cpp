@@ -212,29 +212,23 @@ std::vector<float> NeusField::sdf_at(const std::vector<glm::vec3>& points) const
   if (points.empty()) return out;
   const std::uint32_t chunk = std::uint32_t(std::min<std::size_t>(kInferenceChunk, points.size()));
   const bool hash = hash_.has_value();
-  gpu::Buffer<float> raw(context_, std::uint64_t(chunk) * 3, "neus query points");
   gpu::Buffer<float> enc(context_, std::uint64_t(chunk) * 3, "neus query encoder points");
   gpu::Buffer<float> rows(context_, std::uint64_t(chunk) * sdf_->input_stride(), "neus query rows");
   gpu::Buffer<float> result(context_, std::uint64_t(chunk) * sdf_->output_stride(), "neus query sdf");
-  std::vector<float> host(std::size_t(chunk) * 3), enc_host(std::size_t(chunk) * 3);
+  // The hash path uploads whole rows (raw position in columns 0-2, the encoding writes the rest);
+  // the frequency encoding writes every column itself.
+  std::vector<float> enc_host(std::size_t(chunk) * 3), row_host(hash ? std::size_t(chunk) * sdf_->input_stride() : 0);
   gpu::Stream stream(context_);
   for (std::size_t first = 0; first < points.size(); first += chunk) {
     const std::uint32_t count = std::uint32_t(std::min<std::size_t>(chunk, points.size() - first));
-    rows.fill_u32(0);
-    std::vector<float> row_host;
     for (std::uint32_t i = 0; i < count; ++i)
       for (int a = 0; a < 3; ++a) {
-        host[3 * i + a] = points[first + i][a];
-        enc_host[3 * i + a] = hash ? points[first + i][a] * 0.5f + 0.5f : points[first + i][a];
+        const float x = points[first + i][a];
+        enc_host[3 * i + a] = hash ? x * 0.5f + 0.5f : x;
+        if (hash) row_host[std::size_t(i) * sdf_->input_stride() + a] = x;
       }
     enc.upload(std::span<const float>(enc_host.data(), std::size_t(count) * 3));
-    if (hash) {
-      // The raw position goes in columns 0-2 of each row, the encoding after it.
-      row_host.assign(std::size_t(count) * sdf_->input_stride(), 0.f);
-      for (std::uint32_t i = 0; i < count; ++i)
-        for (int a = 0; a < 3; ++a) row_host[std::size_t(i) * sdf_->input_stride() + a] = host[3 * i + a];
-      rows.upload(row_host);
-    }
+    if (hash) rows.upload(std::span<const float>(row_host.data(), std::size_t(count) * sdf_->input_stride()));
     encode(stream, enc.whole(), rows.whole(), count);
     sdf_->infer(stream, rows.whole(), result.whole(), count);
     stream.submit_and_wait();

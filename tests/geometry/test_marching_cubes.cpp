@@ -15,6 +15,7 @@
 #include "engine/geometry/marching_cubes.hpp"
 #include "engine/geometry/marching_cubes_table.hpp"
 #include "engine/geometry/mesh_tools.hpp"
+#include "tests/support/scalar_grid.hpp"
 
 using namespace nf;
 using namespace nf::geometry;
@@ -23,22 +24,7 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-struct Grid {
-  std::vector<float> values;
-  glm::ivec3 dims;
-  glm::vec3 origin, h;
-  glm::vec3 at(int x, int y, int z) const { return origin + glm::vec3(float(x), float(y), float(z)) * h; }
-};
-
-template <class F>
-Grid sample(glm::ivec3 dims, glm::vec3 origin, glm::vec3 h, F field) {
-  Grid g{{}, dims, origin, h};
-  g.values.reserve(std::size_t(dims.x) * dims.y * dims.z);
-  for (int z = 0; z < dims.z; ++z)
-    for (int y = 0; y < dims.y; ++y)
-      for (int x = 0; x < dims.x; ++x) g.values.push_back(float(field(glm::dvec3(g.at(x, y, z)))));
-  return g;
-}
+using Grid = test::ScalarGrid;
 
 io::Mesh extract(const Grid& g, float iso = 0.f) { return marching_cubes(g.values.data(), g.dims, g.origin, g.h, iso); }
 
@@ -184,7 +170,7 @@ TEST_CASE("a sphere: closed manifold of genus 0, accurate area, volume, position
   const double r = 0.7;
   const int n = 64;
   const float h = 2.f / float(n - 1);
-  const Grid g = sample({n, n, n}, glm::vec3(-1.f), glm::vec3(h), [&](glm::dvec3 p) { return glm::length(p - c) - r; });
+  const Grid g = test::sample_grid({n, n, n}, glm::vec3(-1.f), glm::vec3(h), [&](glm::dvec3 p) { return glm::length(p - c) - r; });
   io::Mesh m = extract(g);
   REQUIRE(m.triangle_count() > 0);
   CHECK_NOTHROW(m.validate("sphere"));
@@ -236,7 +222,7 @@ TEST_CASE("a sphere on an anisotropic grid, and the iso-value shifts the surface
   const glm::vec3 h(0.045f, 0.03f, 0.02f);
   const glm::ivec3 dims(45, 67, 101);  // about [-1, 1]^3
   const double r = 0.6;
-  const Grid g = sample(dims, glm::vec3(-1.f), h, [&](glm::dvec3 p) { return glm::length(p) - r; });
+  const Grid g = test::sample_grid(dims, glm::vec3(-1.f), h, [&](glm::dvec3 p) { return glm::length(p) - r; });
   for (float iso : {0.f, 0.15f}) {
     const io::Mesh m = extract(g, iso);
     CHECK(is_closed_manifold(m));
@@ -258,7 +244,7 @@ TEST_CASE("a sphere on an anisotropic grid, and the iso-value shifts the surface
 TEST_CASE("a torus has Euler characteristic 0") {
   const double R = 0.6, r = 0.22;
   const int n = 64;
-  const Grid g = sample({n, n, n}, glm::vec3(-1.f), glm::vec3(2.f / float(n - 1)), [&](glm::dvec3 p) {
+  const Grid g = test::sample_grid({n, n, n}, glm::vec3(-1.f), glm::vec3(2.f / float(n - 1)), [&](glm::dvec3 p) {
     const double q = std::sqrt(p.x * p.x + p.z * p.z) - R;
     return std::sqrt(q * q + p.y * p.y) - r;
   });
@@ -276,7 +262,7 @@ TEST_CASE("two disjoint spheres: keep_largest_component keeps the bigger one, wi
   const double rb = 0.45, rs = 0.3;
   const int n = 64;
   const float h = 2.f / float(n - 1);
-  const Grid g = sample({n, n, n}, glm::vec3(-1.f), glm::vec3(h), [&](glm::dvec3 p) {
+  const Grid g = test::sample_grid({n, n, n}, glm::vec3(-1.f), glm::vec3(h), [&](glm::dvec3 p) {
     return std::min(glm::length(p - big) - rb, glm::length(p - small) - rs);
   });
   io::Mesh m = extract(g);

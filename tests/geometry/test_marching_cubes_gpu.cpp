@@ -20,6 +20,7 @@
 #include "engine/geometry/mesh_tools.hpp"
 #include "engine/gpu/buffer.hpp"
 #include "tests/support/gpu_test.hpp"
+#include "tests/support/scalar_grid.hpp"
 
 using namespace nf;
 using namespace nf::geometry;
@@ -28,22 +29,7 @@ namespace {
 
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
-struct Grid {
-  std::vector<float> values;
-  glm::ivec3 dims;
-  glm::vec3 origin, h;
-};
-
-template <class F>
-Grid sample(glm::ivec3 dims, glm::vec3 origin, glm::vec3 h, F field) {
-  Grid g{{}, dims, origin, h};
-  g.values.reserve(std::size_t(dims.x) * dims.y * dims.z);
-  for (int z = 0; z < dims.z; ++z)
-    for (int y = 0; y < dims.y; ++y)
-      for (int x = 0; x < dims.x; ++x)
-        g.values.push_back(float(field(glm::dvec3(origin + glm::vec3(float(x), float(y), float(z)) * h))));
-  return g;
-}
+using Grid = test::ScalarGrid;
 
 io::Mesh cpu_mesh(const Grid& g, float iso = 0.f) { return marching_cubes(g.values.data(), g.dims, g.origin, g.h, iso); }
 
@@ -147,7 +133,7 @@ void check_same_mesh(const io::Mesh& got, const io::Mesh& cpu, const Grid& g, do
 
 Grid sphere_grid(glm::ivec3 dims, glm::vec3 h, glm::dvec3 centre, double r) {
   const glm::vec3 origin = -0.5f * glm::vec3(dims - 1) * h;
-  return sample(dims, origin, h, [&](glm::dvec3 p) { return glm::length(p - centre) - r; });
+  return test::sample_grid(dims, origin, h, [&](glm::dvec3 p) { return glm::length(p - centre) - r; });
 }
 
 Grid noise_grid(glm::ivec3 dims, unsigned seed, bool padded, bool quantised) {
@@ -182,7 +168,7 @@ TEST_CASE("gpu marching cubes: a sphere on an anisotropic grid gives the CPU mes
 TEST_CASE("gpu marching cubes: a torus gives the CPU mesh, closed") {
   const double R = 0.6, r = 0.22;
   const int n = 56;
-  const Grid g = sample({n, n, n}, glm::vec3(-1.f), glm::vec3(2.f / float(n - 1)), [&](glm::dvec3 p) {
+  const Grid g = test::sample_grid({n, n, n}, glm::vec3(-1.f), glm::vec3(2.f / float(n - 1)), [&](glm::dvec3 p) {
     const double q = std::sqrt(p.x * p.x + p.z * p.z) - R;
     return std::sqrt(q * q + p.y * p.y) - r;
   });
@@ -225,7 +211,7 @@ TEST_CASE("gpu marching cubes: samples exactly on the iso-value count as outside
     CHECK(gpu_mesh(q, -1.f).vertex_count() == 0);
   }
   // A smooth field with exact zeros: |p|^2 - 25 on an integer grid (e.g. (3, 4, 0) lies on it).
-  const Grid s = sample({13, 13, 13}, glm::vec3(-6.f), glm::vec3(1.f), [](glm::dvec3 p) { return glm::dot(p, p) - 25.0; });
+  const Grid s = test::sample_grid({13, 13, 13}, glm::vec3(-6.f), glm::vec3(1.f), [](glm::dvec3 p) { return glm::dot(p, p) - 25.0; });
   check_same_mesh(gpu_mesh(s), cpu_mesh(s), s);
   CHECK(is_closed_manifold(gpu_mesh(s)));
   // One inside sample in a 3^3 grid: an octahedron.

@@ -40,15 +40,6 @@ struct Capsule {
   glm::dvec3 centre() const { return offset + scale * 0.5 * (a + b); }
 };
 
-io::Camera make_camera(const std::string& name, glm::dmat4 c2w, std::uint32_t size, double fov_deg) {
-  io::Camera c;
-  c.name = name;
-  c.width = c.height = size;
-  c.fx = c.fy = 0.5 * size / std::tan(0.5 * fov_deg * kPi / 180.0);
-  c.cx = c.cy = 0.5 * size;
-  c.camera_to_world = c2w;
-  return c;
-}
 
 // Sphere-traced image and mask: a position-dependent albedo (so colour carries information),
 // Lambert shading from a light at the camera, grey background.
@@ -98,12 +89,12 @@ io::Scene write_capsule_scene(const fs::path& dir, const Capsule& cap, int views
   for (int i = 0; i < views; ++i) {
     const double az = 2 * kPi * i / views, el = (i % 3 - 1) * 30.0 * kPi / 180.0;
     const glm::dvec3 eye = cap.centre() + dist * glm::dvec3(std::cos(el) * std::cos(az), std::sin(el), std::cos(el) * std::sin(az));
-    scene.cameras.push_back(make_camera("v" + std::to_string(100 + i).substr(1), test::look_at(eye, cap.centre()), size, 35.0));
+    scene.cameras.push_back(test::pinhole_camera("v" + std::to_string(100 + i).substr(1), test::look_at(eye, cap.centre()), size, size, 35.0));
   }
   if (extras.inside_camera)  // inside the unit sphere of the normalisation, seeing part of the capsule
-    scene.cameras.push_back(make_camera("inside", test::look_at(cap.centre() + cap.scale * glm::dvec3(0.2, 0.0, 0.75), cap.centre()), size, 60.0));
+    scene.cameras.push_back(test::pinhole_camera("inside", test::look_at(cap.centre() + cap.scale * glm::dvec3(0.2, 0.0, 0.75), cap.centre()), size, size, 60.0));
   if (extras.blind_camera)  // looks away: an empty mask
-    scene.cameras.push_back(make_camera("blind", test::look_at(cap.centre() + dist * glm::dvec3(0, 0, 1), cap.centre() + dist * glm::dvec3(0, 0, 2)), size, 35.0));
+    scene.cameras.push_back(test::pinhole_camera("blind", test::look_at(cap.centre() + dist * glm::dvec3(0, 0, 1), cap.centre() + dist * glm::dvec3(0, 0, 2)), size, size, 35.0));
   for (io::Camera& c : scene.cameras) {
     io::Image rgb, mask;
     render(cap, c, rgb, mask);

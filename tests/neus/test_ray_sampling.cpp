@@ -24,15 +24,6 @@ constexpr double kPi = 3.14159265358979323846;
 const glm::dvec3 kCentre(3.0, -2.0, 1.0);
 constexpr double kRadius = 0.5;
 
-io::Camera make_camera(const std::string& name, glm::dmat4 c2w, std::uint32_t w, std::uint32_t h, double fov_deg) {
-  io::Camera c;
-  c.name = name;
-  c.width = w, c.height = h;
-  c.fx = c.fy = 0.5 * w / std::tan(0.5 * fov_deg * kPi / 180.0);
-  c.cx = 0.5 * w, c.cy = 0.5 * h;
-  c.camera_to_world = c2w;
-  return c;
-}
 
 // Ray (origin, unit direction) vs sphere: the [t0, t1] interval, false on a miss or behind.
 bool hit_sphere(glm::dvec3 o, glm::dvec3 d, glm::dvec3 c, double r, double& t0, double& t1) {
@@ -69,7 +60,7 @@ Fixture make_fixture(int res = 48) {
   for (int i = 0; i < 8; ++i) {
     const double az = 2 * kPi * i / 8, el = (i % 2 ? 25.0 : -25.0) * kPi / 180.0;
     const glm::dvec3 eye = kCentre + 3.0 * glm::dvec3(std::cos(el) * std::cos(az), std::sin(el), std::cos(el) * std::sin(az));
-    f.scene.cameras.push_back(make_camera("c" + std::to_string(i), test::look_at(eye, kCentre), 96, 80, 40.0));
+    f.scene.cameras.push_back(test::pinhole_camera("c" + std::to_string(i), test::look_at(eye, kCentre), 96, 80, 40.0));
     f.masks.push_back(sphere_mask(f.scene.cameras.back()));
   }
   neus::OccupancyGrid g;
@@ -219,7 +210,7 @@ TEST_CASE("sample_rays: the same seed gives the same rays, another seed others")
 TEST_CASE("hard case: a camera inside the unit sphere gets near = epsilon and finite rays") {
   Fixture f = make_fixture(32);
   // Inside the object, looking along +x; no mask: all its pixels are "inside".
-  f.scene.cameras.push_back(make_camera("inner", test::look_at(kCentre + glm::dvec3(-0.1, 0.05, 0), kCentre + glm::dvec3(1, 0, 0)), 32, 24, 90.0));
+  f.scene.cameras.push_back(test::pinhole_camera("inner", test::look_at(kCentre + glm::dvec3(-0.1, 0.05, 0), kCentre + glm::dvec3(1, 0, 0)), 32, 24, 90.0));
   f.masks.emplace_back();
   const neus::RayPool pool = neus::build_ray_pool(f.scene, f.masks);
   CHECK(pool.count(8, RayClass::inside) == 32 * 24);

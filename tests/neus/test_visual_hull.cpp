@@ -29,15 +29,6 @@ struct Sphere {
   double radius;
 };
 
-io::Camera make_camera(const std::string& name, glm::dmat4 c2w, std::uint32_t size, double fov_deg) {
-  io::Camera c;
-  c.name = name;
-  c.width = c.height = size;
-  c.fx = c.fy = 0.5 * size / std::tan(0.5 * fov_deg * kPi / 180.0);
-  c.cx = c.cy = 0.5 * size;
-  c.camera_to_world = c2w;
-  return c;
-}
 
 // The sphere's silhouette: a pixel is set when the ray through its centre hits the sphere.
 io::Image sphere_mask(const io::Camera& c, const Sphere& s) {
@@ -67,7 +58,7 @@ io::Scene write_sphere_scene(const fs::path& dir, const Sphere& s, int n, double
   for (int i = 0; i < n; ++i) {
     const double az = 2 * kPi * i / n, el = (i % 2 ? 25.0 : -25.0) * kPi / 180.0;
     const glm::dvec3 eye = s.centre + dist * glm::dvec3(std::cos(el) * std::cos(az), std::sin(el), std::cos(el) * std::sin(az));
-    scene.cameras.push_back(make_camera("m" + std::to_string(100 + i).substr(1), test::look_at(eye, s.centre), size, 40.0));
+    scene.cameras.push_back(test::pinhole_camera("m" + std::to_string(100 + i).substr(1), test::look_at(eye, s.centre), size, size, 40.0));
   }
   for (const io::Camera& c : extra) scene.cameras.push_back(c);
   for (io::Camera& c : scene.cameras) {
@@ -250,9 +241,9 @@ TEST_CASE("visual hull hard cases") {
   SUBCASE("a camera inside the object carves nothing behind it; a close-up (partial view) carves nothing of it") {
     const glm::dvec3 eye = s.centre + glm::dvec3(0.1, 0.05, -0.1);
     const std::vector<io::Camera> extra{
-        make_camera("inside", test::look_at(eye, eye + glm::dvec3(1, 0.2, 0.3)), 128, 60.0),
-        make_camera("close", test::look_at(s.centre + glm::dvec3(0, 0, 1.2), s.centre), 128, 100.0),
-        make_camera("closeup", test::look_at(s.centre + glm::dvec3(0.5, 0.3, 1.8), s.centre + glm::dvec3(0.2, 0, 0)), 128, 30.0)};
+        test::pinhole_camera("inside", test::look_at(eye, eye + glm::dvec3(1, 0.2, 0.3)), 128, 128, 60.0),
+        test::pinhole_camera("close", test::look_at(s.centre + glm::dvec3(0, 0, 1.2), s.centre), 128, 128, 100.0),
+        test::pinhole_camera("closeup", test::look_at(s.centre + glm::dvec3(0.5, 0.3, 1.8), s.centre + glm::dvec3(0.2, 0, 0)), 128, 128, 30.0)};
     const io::Scene with = write_sphere_scene(dir / "inside", s, 10, 3.0, 128, extra);
     // The inside camera's mask is all set, the close-up's touches the border: both are partial views.
     for (const char* name : {"inside", "closeup"}) {

@@ -40,6 +40,19 @@ inline glm::dmat4 look_at(glm::dvec3 eye, glm::dvec3 target, glm::dvec3 up = {0,
   return m;
 }
 
+// A pinhole camera of w x h pixels, square pixels, horizontal field of view fov_deg, centred
+// principal point.
+inline io::Camera pinhole_camera(const std::string& name, const glm::dmat4& camera_to_world, std::uint32_t w,
+                                 std::uint32_t h, double fov_deg) {
+  io::Camera c;
+  c.name = name;
+  c.width = w, c.height = h;
+  c.fx = c.fy = 0.5 * w / std::tan(0.5 * fov_deg * 3.14159265358979323846 / 180.0);
+  c.cx = 0.5 * w, c.cy = 0.5 * h;
+  c.camera_to_world = camera_to_world;
+  return c;
+}
+
 // OpenCV world-to-camera rotation (rows) and translation of a camera.
 inline void opencv_extrinsics(const io::Camera& c, double R[3][3], double t[3]) {
   glm::dmat4 flip(1.0);
