@@ -12,7 +12,13 @@ namespace nf::nn {
 namespace {
 
 constexpr std::uint32_t kWorkgroup = 64;
-constexpr std::uint32_t kPreferredColumns = 16;  // output rows per invocation in mlp_forward
+// Output rows per invocation in mlp_forward: 32 accumulators fill the vector registers of an
+// AVX-512 host (lavapipe) and halve the per-lane input loads per multiply-add against 16.
+constexpr std::uint32_t kPreferredColumns = 32;
+// Input vec4 per mlp_forward dispatch: its body is unrolled, and compiling 16 x 32 vec4 already
+// takes lavapipe's LLVM 8 s (once per machine: Mesa caches it), twice that 40 s.
+constexpr std::uint32_t kInputChunk4 = 16;
+constexpr std::uint32_t kWeightWindow4 = 4096;  // mlp_forward's uniform weight window (64 KiB)
 constexpr std::uint32_t kSlabItems = 32;  // samples per invocation in mlp_backward_weights
 constexpr std::uint32_t kSlab = kWorkgroup * kSlabItems;
 constexpr std::uint32_t kWeightBlock = 2;  // mlp_backward_weights: up to 8 x 8 gradient entries per invocation
@@ -21,7 +27,7 @@ constexpr std::uint32_t kMaxInferenceChunk = 1u << 16;
 struct ForwardPush {
   std::uint32_t batch, out4, out_dim, row_first, rows, activation;
   float beta, omega;
-  std::uint32_t store_z, has_bias, accumulate, w_base;
+  std::uint32_t store_z, has_bias, accumulate, w_base, w_stride4, x_stride4, x_first4;
 };
 struct ActivationBackwardPush {
   std::uint32_t count, out_dim, out_stride, activation;
@@ -56,9 +62,9 @@ Mlp::Mlp(gpu::Context& context, const MlpConfig& config, const std::string& name
 }
 
 std::uint32_t Mlp::columns_for(std::uint32_t in_stride) const {
-  // mlp_forward's weight block: COLS rows of in_stride floats plus 16 vec4 of alignment slack.
-  const std::uint64_t capacity = context_.info().limits.max_uniform_buffer_range / 16;
-  for (std::uint32_t cols : {kPreferredColumns, 8u})
+  // mlp_forward's weight window: COLS rows of in_stride floats plus 16 vec4 of alignment slack.
+  const std::uint64_t capacity = std::min<std::uint64_t>(kWeightWindow4, context_.info().limits.max_uniform_buffer_range / 16);
+  for (std::uint32_t cols : {kPreferredColumns, 16u, 8u})
     if (std::uint64_t(cols) * (in_stride / 4) + 16 <= capacity) return cols;
   throw DeviceError("mlp: a layer with " + std::to_string(in_stride) + " inputs needs more uniform-buffer range than "
                     "the device's " + std::to_string(context_.info().limits.max_uniform_buffer_range) + " bytes");
@@ -66,28 +72,37 @@ std::uint32_t Mlp::columns_for(std::uint32_t in_stride) const {
 
 void Mlp::record_product(gpu::Stream& stream, const Product& p, gpu::BufferRange x, gpu::BufferRange y,
                          gpu::BufferRange z, std::uint32_t batch) const {
-  const std::uint32_t cols = columns_for(p.in_stride);
-  const gpu::Kernel& k = context_.kernel("nn/mlp_forward:c" + std::to_string(cols), {{0, kWorkgroup}, {3, p.in_stride / 4}});
+  const std::uint32_t cols = columns_for(p.in_stride), in4 = p.in_stride / 4;
   const std::uint64_t align = std::max<std::uint64_t>(4, context_.info().limits.min_uniform_buffer_offset_alignment / 4);
+  const std::uint64_t buffer_floats = p.weights->bytes() / 4;
   for (std::uint32_t first = 0; first < p.out_dim; first += cols) {
     const std::uint32_t rows = std::min(cols, p.out_dim - first);
-    // Bind from an aligned offset at or before the block; the shader skips the difference.
-    const std::uint64_t start = p.weight_offset + std::uint64_t(first) * p.in_stride;
-    const std::uint64_t base = start / align * align;
-    const gpu::BufferRange weights = p.weights->range_bytes(base * 4, (start - base + std::uint64_t(rows) * p.in_stride) * 4);
-    const ForwardPush push{batch,
-                           p.out_stride / 4,
-                           p.out_dim,
-                           first,
-                           rows,
-                           std::uint32_t(p.activation.type),
-                           p.activation.beta,
-                           p.activation.omega,
-                           z.size ? 1u : 0u,
-                           p.biases.size ? 1u : 0u,
-                           0u,
-                           std::uint32_t((start - base) / 4)};
-    stream.dispatch(k, {x, y, z, weights, p.biases}, push, gpu::Elements(batch));
+    for (std::uint32_t k4 = 0; k4 < in4; k4 += kInputChunk4) {
+      const std::uint32_t chunk4 = std::min(kInputChunk4, in4 - k4);
+      const bool first_chunk = k4 == 0, last_chunk = k4 + chunk4 == in4;
+      const gpu::Kernel& k =
+          context_.kernel("nn/mlp_forward:c" + std::to_string(cols), {{0, kWorkgroup}, {3, chunk4}});
+      // Bind from an aligned offset at or before the block; the shader skips the difference.
+      const std::uint64_t start = p.weight_offset + std::uint64_t(first) * p.in_stride + 4u * k4;
+      const std::uint64_t base = start / align * align;
+      const std::uint64_t window = std::min<std::uint64_t>(kWeightWindow4 * 4, buffer_floats - base);
+      const ForwardPush push{batch,
+                             p.out_stride / 4,
+                             p.out_dim,
+                             first,
+                             rows,
+                             std::uint32_t(last_chunk ? p.activation.type : Activation::None),
+                             p.activation.beta,
+                             p.activation.omega,
+                             last_chunk && z.size ? 1u : 0u,
+                             first_chunk && p.biases.size ? 1u : 0u,
+                             first_chunk ? 0u : 1u,
+                             std::uint32_t((start - base) / 4),
+                             in4,
+                             in4,
+                             k4};
+      stream.dispatch(k, {x, y, z, p.weights->range_bytes(base * 4, window * 4), p.biases}, push, gpu::Elements(batch));
+    }
   }
 }
 

@@ -24,9 +24,13 @@ MlpConfig config_of(const Params& p) {
   return c;
 }
 
+struct Dims {
+  std::uint32_t in = 5, hidden0 = 16, hidden1 = 7, out = 3;
+};
+
 Case make_case(const std::string& name, Activation act, Activation out_act, std::uint32_t batch, double input_scale,
-               double beta, double omega, unsigned seed) {
-  Params p{{"in", 5}, {"hidden0", 16}, {"hidden1", 7}, {"out", 3}, {"batch", batch},
+               double beta, double omega, unsigned seed, Dims d = {}) {
+  Params p{{"in", d.in}, {"hidden0", d.hidden0}, {"hidden1", d.hidden1}, {"out", d.out}, {"batch", batch},
            {"activation", double(act)}, {"output_activation", double(out_act)}, {"beta", beta}, {"omega", omega}};
   const MlpConfig c = config_of(p);
   std::mt19937 rng(seed);
@@ -67,6 +71,17 @@ Case softplus_big_case() {
   return c;
 }
 
+// Layers wider than one mlp_forward dispatch: inputs split into chunks that accumulate (100 and 72
+// inputs: 16 + 9 and 16 + 2 vec4) and outputs into row blocks with a short last one (70 = 32 + 32 +
+// 6). Finite differences over ~10k parameters would take minutes; the small cases cover them, so
+// this one checks the device against the reference only.
+Case wide_case() {
+  Case c = make_case("wide_chunked", Activation::Softplus, Activation::None, 37, 1.0, 10, 30, 6, {100, 70, 40, 3});
+  c.step_double = {0.0, 0.0};
+  c.step_float = {0.0, 0.0};
+  return c;
+}
+
 class MlpCheck : public gradcheck::WithReference<MlpCheck> {
  public:
   std::string name() const override { return "nn/mlp"; }
@@ -81,6 +96,7 @@ class MlpCheck : public gradcheck::WithReference<MlpCheck> {
         softplus_big_case(),
         make_case("sine_siren", Activation::Sine, Activation::None, 65, 1.0, 100, 30, 4),
         make_case("none_linear", Activation::None, Activation::Sine, 129, 1.0, 100, 2, 5),
+        wide_case(),
     };
   }
 

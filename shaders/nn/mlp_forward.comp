@@ -1,27 +1,35 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 // One MLP layer for a block of COLS output rows: y = act(W x + b). One sample per invocation, read
 // four features at a time; COLS outputs stay in registers. Weights and biases sit in uniform
-// buffers that every lane reads at the same offset: GPUs broadcast them, and on lavapipe this
-// measured 1.6x faster than storage buffers. (Unrolling the input loop so that every offset is a
-// compile-time constant did not help on lavapipe 22.3 and made pipelines take seconds to build.)
+// buffers that every lane reads at the same offset. The body is straight-line code on purpose:
+// lavapipe (Mesa 22.3) loads a value once and broadcasts it only when its offset is built from
+// constants and push constants *and* the load sits outside any loop, branch or early return;
+// anywhere else every lane loads on its own (a gather per weight, 8 loads per FMA). So the input
+// loop is unrolled (IN4 is a specialisation constant), the tail lanes are clamped instead of
+// returning, and only the stores are conditional. LLVM's compile time grows faster than the body
+// (8 s for 16 x 32 vec4, 40 s for twice that), so a dispatch covers a chunk of at most 16 input vec4
+// and later chunks add to y; the bias enters with the first chunk, the activation with the last.
+// GPUs broadcast uniform loads anyway.
 // The same kernel computes the input adjoint dx = W^T dz, on transposed weights. One dispatch per
-// block of COLS rows. Layout: engine/nn/mlp_config.hpp. Host: engine/nn/mlp.cpp.
+// block of COLS rows and input chunk. Layout: engine/nn/mlp_config.hpp. Host: engine/nn/mlp.cpp.
 //! variant c8 -DCOLS=8
 //! variant c16 -DCOLS=16
+//! variant c32 -DCOLS=32
 
 layout(constant_id = 0) const uint WG = 64;
-layout(constant_id = 3) const uint IN4 = 1;  // input row length in vec4
+layout(constant_id = 3) const uint IN4 = 1;  // input vec4 in this dispatch's chunk
 layout(local_size_x_id = 0) in;
 #include "nf_index.glsl"
 #include "nf_activation.glsl"
 
-layout(std430, binding = 0) readonly buffer Input { vec4 x[]; };           // [batch][IN4]
+layout(std430, binding = 0) readonly buffer Input { vec4 x[]; };           // [batch][x_stride4]
 layout(std430, binding = 1) buffer Output { vec4 y[]; };                   // [batch][out4]
 layout(std430, binding = 2) writeonly buffer PreActivation { vec4 z[]; };  // Sine layers in training
-// This dispatch's rows [COLS][IN4], from vec4 w_base on: the binding starts at an offset the device
-// accepts and the push constant covers the rest (up to 16 vec4 for a 256-byte alignment).
-layout(std140, binding = 12) uniform Weights { vec4 w[COLS * IN4 + 16u]; };
+// This dispatch's rows, w_stride4 vec4 apart, from vec4 w_base on: the binding starts at an offset
+// the device accepts and w_base covers the rest; it spans up to 64 KiB (or the buffer's end).
+layout(std140, binding = 12) uniform Weights { vec4 w[4096]; };
 layout(std140, binding = 13) uniform Biases { vec4 b4[256]; };             // the layer's biases
 
 layout(push_constant) uniform Push {
@@ -36,24 +44,29 @@ layout(push_constant) uniform Push {
   uint store_z;
   uint has_bias;
   uint accumulate;  // add to y instead of overwriting
-  uint w_base;      // first vec4 of this dispatch's rows in the weights binding
+  uint w_base;      // first vec4 of this dispatch's block in the weights binding
+  uint w_stride4;   // vec4 between weight rows
+  uint x_stride4;   // vec4 between input rows
+  uint x_first4;    // first input vec4 of this chunk
 } pc;
 
 void main() {
-  const uint s = nf_linear_index();
-  if (s >= pc.batch) return;
+  const uint index = nf_linear_index();
+  const uint s = min(index, pc.batch - 1u);
   float acc[COLS];
-  for (uint c = 0u; c < COLS; ++c) {
+  [[unroll]] for (uint c = 0u; c < COLS; ++c) {
     const uint o = min(pc.row_first + c, pc.out_dim - 1u);
-    acc[c] = pc.has_bias != 0u ? b4[o >> 2][o & 3u] : 0.0;
+    const float bias = b4[o >> 2][o & 3u];
+    acc[c] = pc.has_bias != 0u ? bias : 0.0;
   }
-  for (uint k4 = 0u; k4 < IN4; ++k4) {
-    const vec4 xv = x[s * IN4 + k4];
-    for (uint c = 0u; c < COLS; ++c) {
-      const vec4 wv = w[pc.w_base + min(c, pc.rows - 1u) * IN4 + k4];
+  [[unroll]] for (uint k4 = 0u; k4 < IN4; ++k4) {
+    const vec4 xv = x[s * pc.x_stride4 + pc.x_first4 + k4];
+    [[unroll]] for (uint c = 0u; c < COLS; ++c) {
+      const vec4 wv = w[pc.w_base + min(c, pc.rows - 1u) * pc.w_stride4 + k4];
       acc[c] = fma(xv.x, wv.x, fma(xv.y, wv.y, fma(xv.z, wv.z, fma(xv.w, wv.w, acc[c]))));
     }
   }
+  if (index >= pc.batch) return;
   for (uint j = 0u; j < COLS / 4u; ++j) {
     if (4u * j >= pc.rows) break;
     const uint o = pc.row_first + 4u * j;
