@@ -28,9 +28,10 @@ static_assert(sizeof(ProjectPush) == 108);
 struct KeysPush {
   std::uint32_t count, tiles_x, depth_bits;
   float near_plane, far_plane;
+  std::uint32_t width, height;
 };
 struct RangesPush {
-  std::uint32_t count, depth_bits;
+  std::uint32_t count, depth_bits, tiles;
 };
 struct CompositePush {
   std::uint32_t width, height, tiles_x, has_body;
@@ -159,10 +160,10 @@ void StrandRasterizer::forward(const StrandShape& shape, gpu::BufferRange points
     ensure(ctx, m.values, m.entries, "raster values");
     {
       gpu::ScopedPass pass(stream, "splat/rasterize_keys");
-      const KeysPush kp{std::uint32_t(segments), ntx, depth_b, float(camera.near), float(camera.far)};
+      const KeysPush kp{std::uint32_t(segments), ntx, depth_b, float(camera.near), float(camera.far), camera.width, camera.height};
       stream.dispatch(ctx.kernel("splat/rasterize_keys", {{0, 128}}),
                       {m.proj->range(0, segments * kProjected), m.offsets->range(0, segments), m.rects->range(0, segments * 2),
-                       m.keys->range(0, m.entries), m.values->range(0, m.entries)},
+                       m.keys->range(0, m.entries), m.values->range(0, m.entries), m.touched->range(0, segments)},
                       kp, gpu::Elements(segments));
     }
     {
@@ -171,7 +172,7 @@ void StrandRasterizer::forward(const StrandShape& shape, gpu::BufferRange points
     }
     {
       gpu::ScopedPass pass(stream, "splat/rasterize_ranges");
-      const RangesPush rp{std::uint32_t(m.entries), depth_b};
+      const RangesPush rp{std::uint32_t(m.entries), depth_b, tiles};
       stream.dispatch(ctx.kernel("splat/rasterize_ranges", {{0, 128}}),
                       {m.keys->range(0, m.entries), m.ranges->range(0, std::uint64_t(tiles) * 2)}, rp, gpu::Elements(m.entries));
     }

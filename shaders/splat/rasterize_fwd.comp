@@ -2,13 +2,14 @@
 #extension GL_GOOGLE_include_directive : require
 // Strand rasterisation, pass 4: front-to-back compositing per tile. Writes the 5 channels (alpha,
 // orientation x/y, confidence, depth; planar), the final transmittance and how far into the tile's
-// list each pixel went (for the backward pass). Gaussians behind the body depth are skipped.
+// list each pixel went (for the backward pass). Gaussians behind the body depth are skipped. How
+// Gaussians reach pixels (subgroup batches, ballot, broadcast): nf_splat_composite.glsl.
 
 layout(constant_id = 0) const uint WG = 64;  // NF_TILE^2
 layout(local_size_x_id = 0) in;
 #include "nf_index.glsl"
 
-layout(std430, binding = 0) readonly buffer Proj { float proj[]; };
+layout(std430, binding = 0) readonly buffer Proj { vec4 proj4[]; };  // 3 per Gaussian
 layout(std430, binding = 1) readonly buffer Values { uint values[]; };  // sorted Gaussian ids
 layout(std430, binding = 2) readonly buffer Ranges { uint ranges[]; };
 layout(std430, binding = 3) readonly buffer Body { float body_depth[]; };  // H * W, or 1 float (none)
@@ -22,7 +23,27 @@ layout(push_constant) uniform Push {
 
 #include "nf_splat_composite.glsl"
 
-shared uint s_done;
+// Per-pixel compositing state.
+float T = 1.0;
+vec4 acc = vec4(0.0);  // orientation x, y, confidence, depth
+bool done;
+uint last_used = 0u;
+float occluder;
+vec2 q;
+
+void composite(const NfGaussian g, uint position) {
+  if (done || g.depth > occluder) return;
+  const float alpha = nf_alpha_of(g, nf_power_of(g, q));
+  if (alpha <= 0.0) return;
+  const float next = T * (1.0 - alpha);
+  if (next < T_MIN) {
+    done = true;
+    return;
+  }
+  acc += alpha * T * vec4(g.attr, g.depth);
+  T = next;
+  last_used = position + 1u;
+}
 
 void main() {
   const uint tile = nf_linear_group();
@@ -32,38 +53,25 @@ void main() {
   const uint px = tx * NF_TILE + lx, py = ty * NF_TILE + ly;
   const bool inside = px < pc.width && py < pc.height;
   const uint pix = py * pc.width + px;
-  const float occluder = (inside && pc.has_body != 0u) ? body_depth[pix] : 3.0e38;
-  const vec2 q = vec2(px, py) + 0.5;
+  occluder = (inside && pc.has_body != 0u) ? body_depth[pix] : 3.0e38;
+  q = vec2(px, py) + 0.5;
+  vec2 lo, hi;
+  nf_subgroup_rect(q, lo, hi);
   const uint start = ranges[2u * tile], end = ranges[2u * tile + 1u];
-  bool done = !inside;
-  float T = 1.0;
-  vec4 acc = vec4(0.0);  // orientation x, y, confidence, depth
-  uint last_used = 0u;
-  if (gl_LocalInvocationID.x == 0u) s_done = 0u;
-  barrier();
-  if (done) atomicAdd(s_done, 1u);
-  for (uint first = start; first < end; first += BATCH) {
-    barrier();
-    if (s_done == WG) break;  // uniform: read after the barrier
-    const uint n = min(BATCH, end - first);
-    if (gl_LocalInvocationID.x < n) nf_stage_gaussian(gl_LocalInvocationID.x, values[first + gl_LocalInvocationID.x]);
-    barrier();
-    // A loop whose bounds are the same for every invocation: the Gaussian index j stays uniform,
-    // so CPU devices (lavapipe) load the staged Gaussian once per SIMD batch instead of gathering.
-    for (uint j = 0u; j < n; ++j) {
-      if (done || s_mean_opacity[j].w > occluder) continue;
-      const float alpha = nf_alpha(j, nf_power(j, q));
-      if (alpha <= 0.0) continue;
-      const float next = T * (1.0 - alpha);
-      if (next < T_MIN) {
-        done = true;
-        atomicAdd(s_done, 1u);
-        continue;
+  const uint lane = gl_SubgroupInvocationID;
+  done = !inside;
+  for (uint first = start; first < end; first += gl_SubgroupSize) {
+    if (subgroupAll(done)) break;
+    const uint n = min(gl_SubgroupSize, end - first);
+    const NfGaussianLanes mine = nf_load_gaussian(values[first + min(lane, n - 1u)]);
+    const uvec4 reach = subgroupBallot(lane < n && nf_reaches(nf_unpack(mine), lo, hi));
+    for (uint word = 0u; word * 32u < n; ++word) {
+      uint bits = reach[word];
+      while (bits != 0u) {  // front to back: lowest list position first
+        const uint j = word * 32u + uint(findLSB(bits));
+        bits &= bits - 1u;
+        composite(nf_broadcast(mine, j), first + j - start);
       }
-      const float w = alpha * T;
-      acc += w * vec4(s_attr[j], s_mean_opacity[j].w);
-      T = next;
-      last_used = first + j - start + 1u;
     }
   }
   if (!inside) return;

@@ -1,8 +1,10 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // Strand rasterisation, pass 1: every segment becomes a screen-space Gaussian (12 floats, see
-// nf_splat_project.glsl) and counts the tiles its 3.5-sigma square touches. One invocation
-// per segment. Host: engine/splat/rasterizer.cpp.
+// nf_splat_project.glsl) and counts the tiles it reaches: tiles of its 3.5-sigma square that its
+// ellipse at alpha 1/255 meets (nf_splat_reach.glsl; a fur segment's square holds 2-3 times the
+// tiles its ellipse meets). rasterize_keys writes the same tiles. One invocation per segment.
+// Host: engine/splat/rasterizer.cpp.
 
 layout(constant_id = 0) const uint WG = 128;
 layout(local_size_x_id = 0) in;
@@ -10,6 +12,7 @@ layout(local_size_x_id = 0) in;
 #include "nf_splat_camera.glsl"
 #include "nf_splat_project.glsl"
 #include "nf_splat_tile.glsl"
+#include "nf_splat_reach.glsl"
 
 layout(std430, binding = 0) readonly buffer Points { float points[]; };     // strands * L * 3
 layout(std430, binding = 1) readonly buffer Conf { float conf[]; };         // per segment
@@ -34,7 +37,14 @@ void main() {
     const float r = o[P_RADIUS];
     const int x0 = clamp(int(floor((o[P_U] - r) / float(NF_TILE))), 0, ntx - 1), x1 = clamp(int(floor((o[P_U] + r) / float(NF_TILE))), 0, ntx - 1);
     const int y0 = clamp(int(floor((o[P_V] - r) / float(NF_TILE))), 0, nty - 1), y1 = clamp(int(floor((o[P_V] + r) / float(NF_TILE))), 0, nty - 1);
-    count = uint((x1 - x0 + 1) * (y1 - y0 + 1));
+    const vec2 mean = vec2(o[P_U], o[P_V]);
+    const vec3 conic = vec3(o[P_CA], o[P_CB], o[P_CC]);
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        vec2 lo, hi;
+        nf_tile_rect(uint(x), uint(y), NF_TILE, pc.width, pc.height, lo, hi);
+        if (nf_ellipse_reaches(mean, conic, o[P_OPACITY], lo, hi)) ++count;
+      }
     r0 = uint(x0) | (uint(y0) << 16);
     r1 = uint(x1) | (uint(y1) << 16);
   }

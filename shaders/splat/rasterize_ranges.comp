@@ -11,13 +11,14 @@ layout(std430, binding = 0) readonly buffer Keys { uint keys[]; };
 layout(std430, binding = 1) writeonly buffer Ranges { uint ranges[]; };  // per tile: start, end
 
 layout(push_constant) uniform Push {
-  uint count, depth_bits;
+  uint count, depth_bits, tiles;
 } pc;
 
 void main() {
   const uint i = nf_linear_index();
   if (i >= pc.count) return;
   const uint tile = keys[i] >> pc.depth_bits;
+  if (tile >= pc.tiles) return;  // an unused slot (rasterize_keys), sorted past every tile
   if (i == 0u || (keys[i - 1u] >> pc.depth_bits) != tile) ranges[2u * tile] = i;
   if (i + 1u == pc.count || (keys[i + 1u] >> pc.depth_bits) != tile) ranges[2u * tile + 1u] = i + 1u;
 }
