@@ -36,6 +36,7 @@ const uint FIELDS = 10u;  // u, v, conic a b c, opacity, depth, orientation x, y
 #ifdef NF_SHARED_SUMS
 shared float s_grad[FIELDS][WG];  // per batch slot (a batch is at most one subgroup <= WG)
 #endif
+shared uint s_used;  // how far into the list any pixel of the tile went
 
 // Per-pixel adjoint state.
 float g[5];           // dL/d(alpha, orientation x, y, confidence, depth) of this pixel
@@ -98,7 +99,7 @@ void main() {
   q = vec2(px, py) + 0.5;
   vec2 lo, hi;
   nf_subgroup_rect(q, lo, hi);
-  const uint start = ranges[2u * tile], end = ranges[2u * tile + 1u];
+  const uint start = ranges[2u * tile];
   my_last = inside ? start + last[pix] : start;  // list positions < my_last contributed
   for (uint c = 0u; c < 5u; ++c) {
     g[c] = inside ? grad_image[c * plane + pix] : 0.0;
@@ -106,18 +107,25 @@ void main() {
   }
   T_after = inside ? final_t[pix] : 1.0;
   const uint lane = gl_SubgroupInvocationID;
+  if (gl_LocalInvocationIndex == 0u) s_used = 0u;
 #ifdef NF_SHARED_SUMS
   for (uint i = gl_LocalInvocationIndex; i < FIELDS * WG; i += WG) s_grad[i / WG][i % WG] = 0.0;
-  barrier();
 #endif
-  // Batches from the end of the list, the same for every subgroup (the shared sums rely on it).
-  const uint count = end - start;
+  barrier();
+  // Where the forward stopped (every pixel opaque) nothing behind contributed: start there. In
+  // dense fur most of a tile's list lies behind it.
+  const uint subgroup_last = subgroupMax(my_last);
+  if (subgroupElect()) atomicMax(s_used, subgroup_last - start);
+  barrier();
+  // Batches from the end of the used list, the same for every subgroup (the shared sums rely on it).
+  const uint count = s_used;
+  const uint end_used = start + count;
   for (uint done_count = 0u; done_count < count; done_count += gl_SubgroupSize) {
     const uint n = min(gl_SubgroupSize, count - done_count);
-    const uint first = end - done_count - n;  // this batch covers [first, first + n)
+    const uint first = end_used - done_count - n;  // this batch covers [first, first + n)
     const uint my_id = values[first + min(lane, n - 1u)];
     const NfGaussianLanes mine = nf_load_gaussian(my_id);
-    const uvec4 reach = subgroupBallot(lane < n && nf_reaches(nf_unpack(mine), lo, hi));
+    const uvec4 reach = subgroupBallot(lane < n && first + lane < subgroup_last && nf_reaches(nf_unpack(mine), lo, hi));
     float sums[FIELDS];  // lane j: this subgroup's gradient of the batch's Gaussian j
     for (uint f = 0u; f < FIELDS; ++f) sums[f] = 0.0;
     for (uint word = (n + 31u) / 32u; word-- > 0u;) {
