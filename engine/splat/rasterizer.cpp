@@ -1,6 +1,7 @@
 #include "engine/splat/rasterizer.hpp"
 
 #include <cmath>
+#include <cstdlib>
 
 #include "engine/core/error.hpp"
 #include "engine/core/finite.hpp"
@@ -101,6 +102,30 @@ struct StrandRasterizer::Impl {
 
 StrandRasterizer::StrandRasterizer(gpu::Context& context) : impl_(std::make_unique<Impl>(context)) {}
 StrandRasterizer::~StrandRasterizer() = default;
+namespace {
+
+// Pixels per compositing invocation (a column of rows of the tile). On CPU devices (lavapipe) the
+// subgroup sums of the backward cost more than the pixel maths; 4 pixels per lane sum a Gaussian's
+// gradient over 32 pixels per subgroup instead of 8 (backward 1.8x, forward 2x). GPUs keep one
+// pixel per invocation. NF_SPLAT_PIXELS_PER_INVOCATION (1, 2, 4 or 8) overrides it, so that CI
+// runs the GPU layout too.
+std::uint32_t pixels_per_invocation(const gpu::Context& ctx) {
+  if (const char* env = std::getenv("NF_SPLAT_PIXELS_PER_INVOCATION"); env && *env) {
+    const std::string v = env;
+    if (v == "1" || v == "2" || v == "4" || v == "8") return std::uint32_t(std::stoul(v));
+    throw InputError("NF_SPLAT_PIXELS_PER_INVOCATION is '" + v + "'; use 1, 2, 4 or 8");
+  }
+  return ctx.info().is_cpu() ? 4 : 1;
+}
+
+std::uint32_t composite_workgroup(const gpu::Context& ctx) { return kTile * kTile / pixels_per_invocation(ctx); }
+
+std::vector<gpu::SpecConstant> composite_spec(const gpu::Context& ctx) {
+  return {{0, composite_workgroup(ctx)}, {1, pixels_per_invocation(ctx)}};
+}
+
+}  // namespace
+
 std::uint64_t StrandRasterizer::tile_entries() const { return impl_->entries; }
 
 void StrandRasterizer::forward(const StrandShape& shape, gpu::BufferRange points, gpu::BufferRange confidence,
@@ -182,11 +207,11 @@ void StrandRasterizer::forward(const StrandShape& shape, gpu::BufferRange points
   {
     gpu::ScopedPass pass(stream, "splat/rasterize_fwd");
     const CompositePush cp{camera.width, camera.height, ntx, m.has_body ? 1u : 0u};
-    stream.dispatch(ctx.kernel("splat/rasterize_fwd", {{0, kTile * kTile}}),
+    stream.dispatch(ctx.kernel("splat/rasterize_fwd", composite_spec(ctx)),
                     {m.proj->range(0, segments * kProjected), m.values->range(0, std::max<std::uint64_t>(m.entries, 1)),
                      m.ranges->range(0, std::uint64_t(tiles) * 2), m.body, image, m.final_t->range(0, pixels),
                      m.last->range(0, pixels)},
-                    cp, gpu::Elements(std::uint64_t(tiles) * kTile * kTile));
+                    cp, gpu::Elements(std::uint64_t(tiles) * composite_workgroup(ctx)));
   }
   stream.submit_and_wait();
 }
@@ -212,11 +237,11 @@ void StrandRasterizer::backward(gpu::Stream& stream, gpu::BufferRange grad_image
     // Shared-memory sums where the device has shared float atomics, subgroup sums elsewhere
     // (NF_NO_SHARED_FLOAT_ATOMICS=1 takes them away so CI runs the latter).
     const char* variant = ctx.info().features.float32_atomic_add_shared ? "splat/rasterize_bwd:shared" : "splat/rasterize_bwd:subgroup";
-    stream.dispatch(ctx.kernel(variant, {{0, kTile * kTile}}),
+    stream.dispatch(ctx.kernel(variant, composite_spec(ctx)),
                     {m.proj->range(0, segments * kProjected), m.values->range(0, std::max<std::uint64_t>(m.entries, 1)),
                      m.ranges->range(0, std::uint64_t(tiles) * 2), m.body, m.final_t->range(0, pixels),
                      m.last->range(0, pixels), grad_image, m.grad_proj->range(0, segments * kProjected)},
-                    cp, gpu::Elements(std::uint64_t(tiles) * kTile * kTile));
+                    cp, gpu::Elements(std::uint64_t(tiles) * composite_workgroup(ctx)));
   }
   {
     gpu::ScopedPass pass(stream, "splat/rasterize_project_bwd");

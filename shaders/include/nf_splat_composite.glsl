@@ -66,10 +66,14 @@ float nf_alpha_of(const NfGaussian g, float power) {
 // Whether the Gaussian can reach any pixel of the rectangle lo..hi (pixel centres).
 bool nf_reaches(const NfGaussian g, vec2 lo, vec2 hi) { return nf_ellipse_reaches(g.mean, g.conic, g.opacity, lo, hi); }
 
-// The pixel centres this subgroup shades (all its lanes are active where this is called).
-void nf_subgroup_rect(vec2 q, out vec2 lo, out vec2 hi) {
-  lo = vec2(subgroupMin(q.x), subgroupMin(q.y));
-  hi = vec2(subgroupMax(q.x), subgroupMax(q.y));
+// The pixel centres this subgroup shades, from each lane's first and last pixel (all its lanes
+// are active where this is called).
+void nf_subgroup_rect(vec2 first, vec2 last, out vec2 lo, out vec2 hi) {
+  lo = vec2(subgroupMin(min(first.x, last.x)), subgroupMin(min(first.y, last.y)));
+  hi = vec2(subgroupMax(max(first.x, last.x)), subgroupMax(max(first.y, last.y)));
 }
+
+// Lanes in this subgroup: the batch size (a workgroup smaller than a subgroup fills part of one).
+uint nf_subgroup_lanes() { return subgroupBallotBitCount(subgroupBallot(true)); }
 
 #endif

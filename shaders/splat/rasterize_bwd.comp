@@ -12,8 +12,10 @@
 //! variant subgroup -DNF_SUBGROUP_SUMS
 #extension GL_EXT_shader_atomic_float : require
 
-layout(constant_id = 0) const uint WG = 64;  // NF_TILE^2
+layout(constant_id = 0) const uint WG = 64;  // NF_TILE^2 / PPI
+layout(constant_id = 1) const uint PPI = 1;  // pixels per invocation: a column of PPI rows
 layout(local_size_x_id = 0) in;
+#extension GL_EXT_control_flow_attributes : require
 #include "nf_index.glsl"
 
 layout(std430, binding = 0) readonly buffer Proj { vec4 proj4[]; };  // 3 per Gaussian
@@ -38,51 +40,51 @@ shared float s_grad[FIELDS][WG];  // per batch slot (a batch is at most one subg
 #endif
 shared uint s_used;  // how far into the list any pixel of the tile went
 
-// Per-pixel adjoint state.
-float g[5];           // dL/d(alpha, orientation x, y, confidence, depth) of this pixel
-float T_after;        // transmittance behind the Gaussian being undone
-float behind[5];      // what the Gaussians behind it added to each channel
-float occluder;
-vec2 q;
-bool inside;
-uint my_last;
+// Per-pixel adjoint state of this invocation's PPI pixels.
+float g[PPI][5];       // dL/d(alpha, orientation x, y, confidence, depth) of the pixel
+float T_after[PPI];    // transmittance behind the Gaussian being undone
+float behind[PPI][5];  // what the Gaussians behind it added to each channel
+float occluder[PPI];
+vec2 q[PPI];
+bool inside[PPI];
+uint my_last[PPI];     // list positions below it contributed
 
-// This pixel's gradient of the Gaussian at list position `position` (zero when it did not
-// contribute), and the step back over it.
-void undo(const NfGaussian gs, uint position, out float grad[FIELDS], out bool contributes) {
-  for (uint f = 0u; f < FIELDS; ++f) grad[f] = 0.0;
-  contributes = inside && position < my_last && gs.depth <= occluder;
+// Adds pixel r's gradient of the Gaussian at list position `position` to grad (nothing when it
+// did not contribute) and steps the pixel back over it.
+void undo(uint r, const NfGaussian gs, uint position, inout float grad[FIELDS], inout bool any) {
+  bool contributes = inside[r] && position < my_last[r] && gs.depth <= occluder[r];
   float power = 0.0, alpha = 0.0;
   if (contributes) {
-    power = nf_power_of(gs, q);
+    power = nf_power_of(gs, q[r]);
     alpha = nf_alpha_of(gs, power);
     contributes = alpha > 0.0;
   }
   if (!contributes) return;
+  any = true;
   const float one_minus = max(1e-6, 1.0 - alpha);
-  const float Ti = T_after / one_minus;
+  const float Ti = T_after[r] / one_minus;
   const float w = alpha * Ti;
   const float f5[5] = float[5](1.0, gs.attr.x, gs.attr.y, gs.attr.z, gs.depth);
-  grad[7] = g[1] * w;
-  grad[8] = g[2] * w;
-  grad[9] = g[3] * w;
-  grad[6] = g[4] * w;
+  grad[7] += g[r][1] * w;
+  grad[8] += g[r][2] * w;
+  grad[9] += g[r][3] * w;
+  grad[6] += g[r][4] * w;
   float g_alpha = 0.0;
-  for (uint c = 0u; c < 5u; ++c) g_alpha += g[c] * (Ti * f5[c] - behind[c] / one_minus);
-  for (uint c = 0u; c < 5u; ++c) behind[c] += w * f5[c];
-  T_after = Ti;
+  [[unroll]] for (uint c = 0u; c < 5u; ++c) g_alpha += g[r][c] * (Ti * f5[c] - behind[r][c] / one_minus);
+  [[unroll]] for (uint c = 0u; c < 5u; ++c) behind[r][c] += w * f5[c];
+  T_after[r] = Ti;
   const float e = exp(power);
   if (gs.opacity * e < ALPHA_MAX) {  // the clamp passes no gradient
-    const vec2 d = q - gs.mean;
+    const vec2 d = q[r] - gs.mean;
     const vec3 c = gs.conic;
     const float scale = 1.0 / (1.0 - ALPHA_MIN);
     const float g_power = g_alpha * scale * gs.opacity * e;
-    grad[5] = g_alpha * scale * e;
-    grad[2] = g_power * -0.5 * d.x * d.x;
-    grad[3] = g_power * -d.x * d.y;
-    grad[4] = g_power * -0.5 * d.y * d.y;
-    grad[0] = g_power * (c.x * d.x + c.y * d.y);
-    grad[1] = g_power * (c.y * d.x + c.z * d.y);
+    grad[5] += g_alpha * scale * e;
+    grad[2] += g_power * -0.5 * d.x * d.x;
+    grad[3] += g_power * -d.x * d.y;
+    grad[4] += g_power * -0.5 * d.y * d.y;
+    grad[0] += g_power * (c.x * d.x + c.y * d.y);
+    grad[1] += g_power * (c.y * d.x + c.z * d.y);
   }
 }
 
@@ -90,23 +92,28 @@ void main() {
   const uint tile = nf_linear_group();
   if (tile >= pc.tiles_x * ((pc.height + NF_TILE - 1u) / NF_TILE)) return;  // folded dispatches may overshoot
   const uint ty = tile / pc.tiles_x, tx = tile - ty * pc.tiles_x;
-  const uint lx = gl_LocalInvocationID.x % NF_TILE, ly = gl_LocalInvocationID.x / NF_TILE;
-  const uint px = tx * NF_TILE + lx, py = ty * NF_TILE + ly;
-  inside = px < pc.width && py < pc.height;
-  const uint pix = inside ? py * pc.width + px : 0u;
+  const uint lx = gl_LocalInvocationID.x % NF_TILE, ly0 = (gl_LocalInvocationID.x / NF_TILE) * PPI;
+  const uint px = tx * NF_TILE + lx;
   const uint plane = pc.width * pc.height;
-  occluder = (inside && pc.has_body != 0u) ? body_depth[pix] : 3.0e38;
-  q = vec2(px, py) + 0.5;
-  vec2 lo, hi;
-  nf_subgroup_rect(q, lo, hi);
   const uint start = ranges[2u * tile];
-  my_last = inside ? start + last[pix] : start;  // list positions < my_last contributed
-  for (uint c = 0u; c < 5u; ++c) {
-    g[c] = inside ? grad_image[c * plane + pix] : 0.0;
-    behind[c] = 0.0;
+  uint lane_last = start;
+  [[unroll]] for (uint r = 0u; r < PPI; ++r) {
+    const uint py = ty * NF_TILE + ly0 + r;
+    inside[r] = px < pc.width && py < pc.height;
+    const uint pix = inside[r] ? py * pc.width + px : 0u;
+    occluder[r] = (inside[r] && pc.has_body != 0u) ? body_depth[pix] : 3.0e38;
+    q[r] = vec2(px, py) + 0.5;
+    my_last[r] = inside[r] ? start + last[pix] : start;
+    lane_last = max(lane_last, my_last[r]);
+    [[unroll]] for (uint c = 0u; c < 5u; ++c) {
+      g[r][c] = inside[r] ? grad_image[c * plane + pix] : 0.0;
+      behind[r][c] = 0.0;
+    }
+    T_after[r] = inside[r] ? final_t[pix] : 1.0;
   }
-  T_after = inside ? final_t[pix] : 1.0;
-  const uint lane = gl_SubgroupInvocationID;
+  vec2 lo, hi;
+  nf_subgroup_rect(q[0], q[PPI - 1u], lo, hi);
+  const uint lane = gl_SubgroupInvocationID, lanes = nf_subgroup_lanes();
   if (gl_LocalInvocationIndex == 0u) s_used = 0u;
 #ifdef NF_SHARED_SUMS
   for (uint i = gl_LocalInvocationIndex; i < FIELDS * WG; i += WG) s_grad[i / WG][i % WG] = 0.0;
@@ -114,14 +121,15 @@ void main() {
   barrier();
   // Where the forward stopped (every pixel opaque) nothing behind contributed: start there. In
   // dense fur most of a tile's list lies behind it.
-  const uint subgroup_last = subgroupMax(my_last);
+  const uint subgroup_last = subgroupMax(lane_last);
   if (subgroupElect()) atomicMax(s_used, subgroup_last - start);
   barrier();
-  // Batches from the end of the used list, the same for every subgroup (the shared sums rely on it).
+  // Batches from the end of the used list, the same for every subgroup (the shared sums rely on it;
+  // subgroups of one workgroup have the same size).
   const uint count = s_used;
   const uint end_used = start + count;
-  for (uint done_count = 0u; done_count < count; done_count += gl_SubgroupSize) {
-    const uint n = min(gl_SubgroupSize, count - done_count);
+  for (uint done_count = 0u; done_count < count; done_count += lanes) {
+    const uint n = min(lanes, count - done_count);
     const uint first = end_used - done_count - n;  // this batch covers [first, first + n)
     const uint my_id = values[first + min(lane, n - 1u)];
     const NfGaussianLanes mine = nf_load_gaussian(my_id);
@@ -134,10 +142,12 @@ void main() {
         const uint bit = uint(findMSB(bits));
         bits &= ~(1u << bit);
         const uint j = word * 32u + bit;
+        const NfGaussian gs = nf_broadcast(mine, j);
         float grad[FIELDS];
-        bool contributes;
-        undo(nf_broadcast(mine, j), first + j, grad, contributes);
-        if (subgroupAny(contributes)) {
+        for (uint f = 0u; f < FIELDS; ++f) grad[f] = 0.0;
+        bool any = false;
+        [[unroll]] for (uint r = 0u; r < PPI; ++r) undo(r, gs, first + j, grad, any);
+        if (subgroupAny(any)) {
           for (uint f = 0u; f < FIELDS; ++f) {
             const float s = subgroupAdd(grad[f]);
             if (lane == j) sums[f] = s;

@@ -5,8 +5,10 @@
 // list each pixel went (for the backward pass). Gaussians behind the body depth are skipped. How
 // Gaussians reach pixels (subgroup batches, ballot, broadcast): nf_splat_composite.glsl.
 
-layout(constant_id = 0) const uint WG = 64;  // NF_TILE^2
+layout(constant_id = 0) const uint WG = 64;  // NF_TILE^2 / PPI
+layout(constant_id = 1) const uint PPI = 1;  // pixels per invocation: a column of PPI rows
 layout(local_size_x_id = 0) in;
+#extension GL_EXT_control_flow_attributes : require
 #include "nf_index.glsl"
 
 layout(std430, binding = 0) readonly buffer Proj { vec4 proj4[]; };  // 3 per Gaussian
@@ -23,46 +25,59 @@ layout(push_constant) uniform Push {
 
 #include "nf_splat_composite.glsl"
 
-// Per-pixel compositing state.
-float T = 1.0;
-vec4 acc = vec4(0.0);  // orientation x, y, confidence, depth
-bool done;
-uint last_used = 0u;
-float occluder;
-vec2 q;
+// Per-pixel compositing state of this invocation's PPI pixels.
+float T[PPI];
+vec4 acc[PPI];  // orientation x, y, confidence, depth
+bool done[PPI];
+uint last_used[PPI];
+float occluder[PPI];
+vec2 q[PPI];
 
 void composite(const NfGaussian g, uint position) {
-  if (done || g.depth > occluder) return;
-  const float alpha = nf_alpha_of(g, nf_power_of(g, q));
-  if (alpha <= 0.0) return;
-  const float next = T * (1.0 - alpha);
-  if (next < T_MIN) {
-    done = true;
-    return;
+  [[unroll]] for (uint r = 0u; r < PPI; ++r) {
+    if (done[r] || g.depth > occluder[r]) continue;
+    const float alpha = nf_alpha_of(g, nf_power_of(g, q[r]));
+    if (alpha <= 0.0) continue;
+    const float next = T[r] * (1.0 - alpha);
+    if (next < T_MIN) {
+      done[r] = true;
+      continue;
+    }
+    acc[r] += alpha * T[r] * vec4(g.attr, g.depth);
+    T[r] = next;
+    last_used[r] = position + 1u;
   }
-  acc += alpha * T * vec4(g.attr, g.depth);
-  T = next;
-  last_used = position + 1u;
+}
+
+bool all_done() {
+  bool all = true;
+  [[unroll]] for (uint r = 0u; r < PPI; ++r) all = all && done[r];
+  return all;
 }
 
 void main() {
   const uint tile = nf_linear_group();
   if (tile >= pc.tiles_x * ((pc.height + NF_TILE - 1u) / NF_TILE)) return;  // folded dispatches may overshoot
   const uint ty = tile / pc.tiles_x, tx = tile - ty * pc.tiles_x;
-  const uint lx = gl_LocalInvocationID.x % NF_TILE, ly = gl_LocalInvocationID.x / NF_TILE;
-  const uint px = tx * NF_TILE + lx, py = ty * NF_TILE + ly;
-  const bool inside = px < pc.width && py < pc.height;
-  const uint pix = py * pc.width + px;
-  occluder = (inside && pc.has_body != 0u) ? body_depth[pix] : 3.0e38;
-  q = vec2(px, py) + 0.5;
+  const uint lx = gl_LocalInvocationID.x % NF_TILE, ly0 = (gl_LocalInvocationID.x / NF_TILE) * PPI;
+  const uint px = tx * NF_TILE + lx;
+  [[unroll]] for (uint r = 0u; r < PPI; ++r) {
+    const uint py = ty * NF_TILE + ly0 + r;
+    const bool inside = px < pc.width && py < pc.height;
+    occluder[r] = (inside && pc.has_body != 0u) ? body_depth[py * pc.width + px] : 3.0e38;
+    q[r] = vec2(px, py) + 0.5;
+    T[r] = 1.0;
+    acc[r] = vec4(0.0);
+    done[r] = !inside;
+    last_used[r] = 0u;
+  }
   vec2 lo, hi;
-  nf_subgroup_rect(q, lo, hi);
+  nf_subgroup_rect(q[0], q[PPI - 1u], lo, hi);
   const uint start = ranges[2u * tile], end = ranges[2u * tile + 1u];
-  const uint lane = gl_SubgroupInvocationID;
-  done = !inside;
-  for (uint first = start; first < end; first += gl_SubgroupSize) {
-    if (subgroupAll(done)) break;
-    const uint n = min(gl_SubgroupSize, end - first);
+  const uint lane = gl_SubgroupInvocationID, lanes = nf_subgroup_lanes();
+  for (uint first = start; first < end; first += lanes) {
+    if (subgroupAll(all_done())) break;
+    const uint n = min(lanes, end - first);
     const NfGaussianLanes mine = nf_load_gaussian(values[first + min(lane, n - 1u)]);
     const uvec4 reach = subgroupBallot(lane < n && nf_reaches(nf_unpack(mine), lo, hi));
     for (uint word = 0u; word * 32u < n; ++word) {
@@ -74,13 +89,17 @@ void main() {
       }
     }
   }
-  if (!inside) return;
   const uint plane = pc.width * pc.height;
-  image[pix] = 1.0 - T;
-  image[plane + pix] = acc.x;
-  image[2u * plane + pix] = acc.y;
-  image[3u * plane + pix] = acc.z;
-  image[4u * plane + pix] = acc.w;
-  final_t[pix] = T;
-  last[pix] = last_used;
+  [[unroll]] for (uint r = 0u; r < PPI; ++r) {
+    const uint py = ty * NF_TILE + ly0 + r;
+    if (px >= pc.width || py >= pc.height) continue;
+    const uint pix = py * pc.width + px;
+    image[pix] = 1.0 - T[r];
+    image[plane + pix] = acc[r].x;
+    image[2u * plane + pix] = acc[r].y;
+    image[3u * plane + pix] = acc[r].z;
+    image[4u * plane + pix] = acc[r].w;
+    final_t[pix] = T[r];
+    last[pix] = last_used[r];
+  }
 }
