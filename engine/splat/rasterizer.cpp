@@ -104,19 +104,22 @@ StrandRasterizer::StrandRasterizer(gpu::Context& context) : impl_(std::make_uniq
 StrandRasterizer::~StrandRasterizer() = default;
 namespace {
 
-// Pixels per compositing invocation (a column of rows of the tile). On CPU devices (lavapipe) the
-// subgroup sums of the backward cost more than the pixel maths; 4 pixels per lane sum a Gaussian's
-// gradient over 32 pixels per subgroup instead of 8 (backward 1.8x, forward 2x). GPUs keep one
-// pixel per invocation. NF_SPLAT_PIXELS_PER_INVOCATION (1, 2, 4 or 8) overrides it, so that CI
-// runs the GPU layout too.
-std::uint32_t pixels_per_invocation(const gpu::Context& ctx) {
-  if (const char* env = std::getenv("NF_SPLAT_PIXELS_PER_INVOCATION"); env && *env) {
+// Compositing is laid out for GPUs (one pixel per invocation; backward sums through shared-memory
+// atomics where the device has them) or for CPU devices such as lavapipe (four pixels per
+// invocation, a column of rows, so a subgroup sum covers a Gaussian's gradient over 32 pixels
+// instead of 8; subgroup sums straight to global atomics, since shared atomics there are per-lane
+// loops and barriers switch coroutines). On lavapipe the CPU layout is 2x faster forward and 2.5x
+// backward. NF_SPLAT_GPU_LAYOUT=1 takes the GPU layout on any device, so that CI runs it.
+bool gpu_layout(const gpu::Context& ctx) {
+  if (const char* env = std::getenv("NF_SPLAT_GPU_LAYOUT"); env && *env) {
     const std::string v = env;
-    if (v == "1" || v == "2" || v == "4" || v == "8") return std::uint32_t(std::stoul(v));
-    throw InputError("NF_SPLAT_PIXELS_PER_INVOCATION is '" + v + "'; use 1, 2, 4 or 8");
+    if (v != "0" && v != "1") throw InputError("NF_SPLAT_GPU_LAYOUT is '" + v + "'; use 0 or 1");
+    if (v == "1") return true;
   }
-  return ctx.info().is_cpu() ? 4 : 1;
+  return !ctx.info().is_cpu();
 }
+
+std::uint32_t pixels_per_invocation(const gpu::Context& ctx) { return gpu_layout(ctx) ? 1 : 4; }
 
 std::uint32_t composite_workgroup(const gpu::Context& ctx) { return kTile * kTile / pixels_per_invocation(ctx); }
 
@@ -234,9 +237,10 @@ void StrandRasterizer::backward(gpu::Stream& stream, gpu::BufferRange grad_image
   {
     gpu::ScopedPass pass(stream, "splat/rasterize_bwd");
     const CompositePush cp{camera.width, camera.height, ntx, m.has_body ? 1u : 0u};
-    // Shared-memory sums where the device has shared float atomics, subgroup sums elsewhere
-    // (NF_NO_SHARED_FLOAT_ATOMICS=1 takes them away so CI runs the latter).
-    const char* variant = ctx.info().features.float32_atomic_add_shared ? "splat/rasterize_bwd:shared" : "splat/rasterize_bwd:subgroup";
+    // Shared-memory sums in the GPU layout where the device has shared float atomics (gpu_layout;
+    // NF_NO_SHARED_FLOAT_ATOMICS=1 takes them away).
+    const bool shared_sums = gpu_layout(ctx) && ctx.info().features.float32_atomic_add_shared;
+    const char* variant = shared_sums ? "splat/rasterize_bwd:shared" : "splat/rasterize_bwd:subgroup";
     stream.dispatch(ctx.kernel(variant, composite_spec(ctx)),
                     {m.proj->range(0, segments * kProjected), m.values->range(0, std::max<std::uint64_t>(m.entries, 1)),
                      m.ranges->range(0, std::uint64_t(tiles) * 2), m.body, m.final_t->range(0, pixels),

@@ -5,9 +5,12 @@
 // reach pixels as in the forward (nf_splat_composite.glsl), batch by batch from the end of the
 // list. A Gaussian's gradient is summed over its subgroup's pixels with subgroup sums (kept by the
 // lane that loaded it), then over the tile's subgroups:
-//   shared:   into shared memory with float atomics, then one global atomic per Gaussian and field;
-//   subgroup: one global atomic per subgroup, Gaussian and field (devices without shared float
-//             atomics).
+//   shared:   into shared memory with float atomics, then one global atomic per Gaussian and field
+//             (GPUs with shared float atomics);
+//   subgroup: one global atomic per subgroup, Gaussian and field, with no barriers, so that every
+//             subgroup starts at its own pixels' last contributor. On CPU devices (lavapipe) this
+//             is 1.5x faster: their shared atomics are per-lane loops and barriers switch
+//             coroutines, while a tile there has only two subgroups.
 //! variant shared -DNF_SHARED_SUMS
 //! variant subgroup -DNF_SUBGROUP_SUMS
 #extension GL_EXT_shader_atomic_float : require
@@ -37,8 +40,8 @@ const uint FIELDS = 10u;  // u, v, conic a b c, opacity, depth, orientation x, y
 
 #ifdef NF_SHARED_SUMS
 shared float s_grad[FIELDS][WG];  // per batch slot (a batch is at most one subgroup <= WG)
+shared uint s_used;               // how far into the list any pixel of the tile went
 #endif
-shared uint s_used;  // how far into the list any pixel of the tile went
 
 // Per-pixel adjoint state of this invocation's PPI pixels.
 float g[PPI][5];       // dL/d(alpha, orientation x, y, confidence, depth) of the pixel
@@ -114,19 +117,20 @@ void main() {
   vec2 lo, hi;
   nf_subgroup_rect(q[0], q[PPI - 1u], lo, hi);
   const uint lane = gl_SubgroupInvocationID, lanes = nf_subgroup_lanes();
-  if (gl_LocalInvocationIndex == 0u) s_used = 0u;
-#ifdef NF_SHARED_SUMS
-  for (uint i = gl_LocalInvocationIndex; i < FIELDS * WG; i += WG) s_grad[i / WG][i % WG] = 0.0;
-#endif
-  barrier();
   // Where the forward stopped (every pixel opaque) nothing behind contributed: start there. In
   // dense fur most of a tile's list lies behind it.
   const uint subgroup_last = subgroupMax(lane_last);
+#ifdef NF_SHARED_SUMS
+  // The shared sums need every subgroup on the same batches: start at the tile's furthest point.
+  if (gl_LocalInvocationIndex == 0u) s_used = 0u;
+  for (uint i = gl_LocalInvocationIndex; i < FIELDS * WG; i += WG) s_grad[i / WG][i % WG] = 0.0;
+  barrier();
   if (subgroupElect()) atomicMax(s_used, subgroup_last - start);
   barrier();
-  // Batches from the end of the used list, the same for every subgroup (the shared sums rely on it;
-  // subgroups of one workgroup have the same size).
   const uint count = s_used;
+#else
+  const uint count = subgroup_last - start;
+#endif
   const uint end_used = start + count;
   for (uint done_count = 0u; done_count < count; done_count += lanes) {
     const uint n = min(lanes, count - done_count);
