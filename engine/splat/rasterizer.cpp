@@ -26,13 +26,18 @@ struct ProjectPush {
 };
 static_assert(sizeof(ProjectPush) == 108);
 
-struct KeysPush {
-  std::uint32_t count, tiles_x, depth_bits;
+struct DepthKeysPush {
+  std::uint32_t count, depth_bits;
   float near_plane, far_plane;
-  std::uint32_t width, height;
+};
+struct CountPush {
+  std::uint32_t count;
+};
+struct KeysPush {
+  std::uint32_t count, tiles_x, tiles, width, height;
 };
 struct RangesPush {
-  std::uint32_t count, depth_bits, tiles;
+  std::uint32_t count, tiles;
 };
 struct CompositePush {
   std::uint32_t width, height, tiles_x, has_body;
@@ -90,6 +95,7 @@ struct StrandRasterizer::Impl {
   gpu::Context& context;
   std::unique_ptr<gpu::Buffer<float>> proj, grad_proj, grad_segment, final_t, no_body;
   std::unique_ptr<gpu::Buffer<std::uint32_t>> touched, offsets, total, rects, keys, values, ranges, last;
+  std::unique_ptr<gpu::Buffer<std::uint32_t>> depth_keys, order, sorted_touched, rank;  // depth order of the Gaussians
   // State of the last forward, for the backward.
   StrandShape shape;
   RasterCamera camera;
@@ -154,6 +160,10 @@ void StrandRasterizer::forward(const StrandShape& shape, gpu::BufferRange points
   ensure(ctx, m.proj, segments * kProjected, "raster projected gaussians");
   ensure(ctx, m.touched, segments, "raster tiles touched");
   ensure(ctx, m.offsets, segments, "raster tile offsets");
+  ensure(ctx, m.depth_keys, segments, "raster depth keys");
+  ensure(ctx, m.order, segments, "raster depth order");
+  ensure(ctx, m.sorted_touched, segments, "raster tiles touched in depth order");
+  ensure(ctx, m.rank, segments, "raster depth rank");
   ensure(ctx, m.total, 1, "raster tile total");
   ensure(ctx, m.rects, segments * 2, "raster tile rectangles");
   const std::uint32_t ntx = tiles_x(camera), nty = tiles_y(camera), tiles = ntx * nty;
@@ -173,14 +183,27 @@ void StrandRasterizer::forward(const StrandShape& shape, gpu::BufferRange points
                        m.rects->range(0, segments * 2)},
                       push, gpu::Elements(segments));
     }
+    // Gaussians in depth order, then their tile counts in that order and the scan that places
+    // their entries: the entries' stable sort by tile then keeps every tile's list front to back.
+    {
+      gpu::ScopedPass pass(stream, "splat/sort_depth");
+      const DepthKeysPush dp{std::uint32_t(segments), depth_bits(camera), float(camera.near), float(camera.far)};
+      stream.dispatch(ctx.kernel("splat/rasterize_depth_keys", {{0, 128}}),
+                      {m.proj->range(0, segments * kProjected), m.depth_keys->range(0, segments), m.order->range(0, segments)},
+                      dp, gpu::Elements(segments));
+      gpu::radix_sort(stream, m.depth_keys->range(0, segments), m.order->range(0, segments), depth_bits(camera));
+      stream.dispatch(ctx.kernel("splat/rasterize_sorted_counts", {{0, 128}}),
+                      {m.order->range(0, segments), m.touched->range(0, segments), m.sorted_touched->range(0, segments),
+                       m.rank->range(0, segments)},
+                      CountPush{std::uint32_t(segments)}, gpu::Elements(segments));
+    }
     {
       gpu::ScopedPass pass(stream, "splat/scan_tiles");
-      gpu::exclusive_scan(stream, m.touched->range(0, segments), m.offsets->range(0, segments), m.total->range(0, 1));
+      gpu::exclusive_scan(stream, m.sorted_touched->range(0, segments), m.offsets->range(0, segments), m.total->range(0, 1));
     }
     stream.submit_and_wait();
   }
   m.entries = m.total->download(0, 1)[0];
-  const std::uint32_t depth_b = depth_bits(camera);
   gpu::Stream stream(ctx);
   stream.fill(m.ranges->range(0, std::uint64_t(tiles) * 2), 0);
   if (m.entries > 0) {
@@ -188,19 +211,21 @@ void StrandRasterizer::forward(const StrandShape& shape, gpu::BufferRange points
     ensure(ctx, m.values, m.entries, "raster values");
     {
       gpu::ScopedPass pass(stream, "splat/rasterize_keys");
-      const KeysPush kp{std::uint32_t(segments), ntx, depth_b, float(camera.near), float(camera.far), camera.width, camera.height};
+      const KeysPush kp{std::uint32_t(segments), ntx, tiles, camera.width, camera.height};
       stream.dispatch(ctx.kernel("splat/rasterize_keys", {{0, 128}}),
                       {m.proj->range(0, segments * kProjected), m.offsets->range(0, segments), m.rects->range(0, segments * 2),
-                       m.keys->range(0, m.entries), m.values->range(0, m.entries), m.touched->range(0, segments)},
+                       m.keys->range(0, m.entries), m.values->range(0, m.entries), m.touched->range(0, segments),
+                       m.rank->range(0, segments)},
                       kp, gpu::Elements(segments));
     }
     {
+      // Tile indices up to `tiles` (unused slots): only those bits.
       gpu::ScopedPass pass(stream, "splat/sort");
-      gpu::radix_sort(stream, m.keys->range(0, m.entries), m.values->range(0, m.entries), 32);
+      gpu::radix_sort(stream, m.keys->range(0, m.entries), m.values->range(0, m.entries), gpu::key_bits_for(tiles));
     }
     {
       gpu::ScopedPass pass(stream, "splat/rasterize_ranges");
-      const RangesPush rp{std::uint32_t(m.entries), depth_b, tiles};
+      const RangesPush rp{std::uint32_t(m.entries), tiles};
       stream.dispatch(ctx.kernel("splat/rasterize_ranges", {{0, 128}}),
                       {m.keys->range(0, m.entries), m.ranges->range(0, std::uint64_t(tiles) * 2)}, rp, gpu::Elements(m.entries));
     }
