@@ -132,41 +132,46 @@ void main() {
   const uint count = subgroup_last - start;
 #endif
   const uint end_used = start + count;
-  for (uint done_count = 0u; done_count < count; done_count += lanes) {
+  // Loops are do-while on purpose: on lavapipe a while or for loop runs its body once more, masked,
+  // before it leaves (its exit test sits at the top); a do-while tests at the bottom.
+  uint done_count = 0u;
+  if (count > 0u) do {
     const uint n = min(lanes, count - done_count);
     const uint first = end_used - done_count - n;  // this batch covers [first, first + n)
     const uint my_id = values[first + min(lane, n - 1u)];
     const NfGaussianLanes mine = nf_load_gaussian(my_id);
     const uvec4 reach = subgroupBallot(lane < n && first + lane < subgroup_last && nf_reaches(nf_unpack(mine), lo, hi));
     float sums[FIELDS];  // lane j: this subgroup's gradient of the batch's Gaussian j
-    for (uint f = 0u; f < FIELDS; ++f) sums[f] = 0.0;
-    for (uint word = (n + 31u) / 32u; word-- > 0u;) {
+    [[unroll]] for (uint f = 0u; f < FIELDS; ++f) sums[f] = 0.0;
+    uint word = (n + 31u) / 32u;
+    do {
+      --word;
       uint bits = reach[word];
-      while (bits != 0u) {  // back to front: highest list position first
+      if (bits != 0u) do {  // back to front: highest list position first
         const uint bit = uint(findMSB(bits));
         bits &= ~(1u << bit);
         const uint j = word * 32u + bit;
         const NfGaussian gs = nf_broadcast(mine, j);
         float grad[FIELDS];
-        for (uint f = 0u; f < FIELDS; ++f) grad[f] = 0.0;
+        [[unroll]] for (uint f = 0u; f < FIELDS; ++f) grad[f] = 0.0;
         bool any = false;
         [[unroll]] for (uint r = 0u; r < PPI; ++r) undo(r, gs, first + j, grad, any);
         if (subgroupAny(any)) {
-          for (uint f = 0u; f < FIELDS; ++f) {
+          [[unroll]] for (uint f = 0u; f < FIELDS; ++f) {
             const float s = subgroupAdd(grad[f]);
             if (lane == j) sums[f] = s;
           }
         }
-      }
-    }
+      } while (bits != 0u);
+    } while (word > 0u);
 #ifdef NF_SHARED_SUMS
     if (lane < n)
-      for (uint f = 0u; f < FIELDS; ++f)
+      [[unroll]] for (uint f = 0u; f < FIELDS; ++f)
         if (sums[f] != 0.0) atomicAdd(s_grad[f][lane], sums[f]);
     barrier();
     if (gl_LocalInvocationIndex < n) {
       const uint slot = gl_LocalInvocationIndex, id = values[first + slot];
-      for (uint f = 0u; f < FIELDS; ++f) {
+      [[unroll]] for (uint f = 0u; f < FIELDS; ++f) {
         const float v = s_grad[f][slot];
         if (v != 0.0) atomicAdd(grad_proj[id * 12u + f], v);
         s_grad[f][slot] = 0.0;
@@ -175,8 +180,9 @@ void main() {
     barrier();
 #else
     if (lane < n)
-      for (uint f = 0u; f < FIELDS; ++f)
+      [[unroll]] for (uint f = 0u; f < FIELDS; ++f)
         if (sums[f] != 0.0) atomicAdd(grad_proj[my_id * 12u + f], sums[f]);
 #endif
-  }
+    done_count += lanes;
+  } while (done_count < count);
 }

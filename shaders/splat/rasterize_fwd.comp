@@ -75,20 +75,26 @@ void main() {
   nf_subgroup_rect(q[0], q[PPI - 1u], lo, hi);
   const uint start = ranges[2u * tile], end = ranges[2u * tile + 1u];
   const uint lane = gl_SubgroupInvocationID, lanes = nf_subgroup_lanes();
-  for (uint first = start; first < end; first += lanes) {
+  // Loops are do-while on purpose: on lavapipe a while or for loop runs its body once more, masked,
+  // before it leaves (its exit test sits at the top); a do-while tests at the bottom.
+  uint first = start;
+  if (first < end) do {
     if (subgroupAll(all_done())) break;
     const uint n = min(lanes, end - first);
     const NfGaussianLanes mine = nf_load_gaussian(values[first + min(lane, n - 1u)]);
     const uvec4 reach = subgroupBallot(lane < n && nf_reaches(nf_unpack(mine), lo, hi));
-    for (uint word = 0u; word * 32u < n; ++word) {
+    uint word = 0u;
+    do {
       uint bits = reach[word];
-      while (bits != 0u) {  // front to back: lowest list position first
+      if (bits != 0u) do {  // front to back: lowest list position first
         const uint j = word * 32u + uint(findLSB(bits));
         bits &= bits - 1u;
         composite(nf_broadcast(mine, j), first + j - start);
-      }
-    }
-  }
+      } while (bits != 0u);
+      ++word;
+    } while (word * 32u < n);
+    first += lanes;
+  } while (first < end);
   const uint plane = pc.width * pc.height;
   [[unroll]] for (uint r = 0u; r < PPI; ++r) {
     const uint py = ty * NF_TILE + ly0 + r;
