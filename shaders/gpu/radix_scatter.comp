@@ -36,17 +36,25 @@ void main() {
   const uint first = block * WG * ITEMS + nf_wg_rank() * ITEMS;
   const uint last = min(first + ITEMS, pc.n);
   uvec4 lo = uvec4(0), hi = uvec4(0);
-  for (uint i = first; i < last; ++i) nf_radix_count(nf_radix_digit(keys_in[i], pc.shift), lo, hi);
+  // do-while, not for: on lavapipe a for loop runs one more masked body before it leaves.
+  if (first < last) {
+    uint i = first;
+    do nf_radix_count(nf_radix_digit(keys_in[i], pc.shift), lo, hi);
+    while (++i < last);
+  }
   uvec4 total_lo, total_hi;
   const uvec4 before_lo = nf_wg_exclusive_add(lo, total_lo);  // barriers also publish bin_base
   const uvec4 before_hi = nf_wg_exclusive_add(hi, total_hi);
   uvec4 seen_lo = uvec4(0), seen_hi = uvec4(0);
-  for (uint i = first; i < last; ++i) {
-    const uint key = keys_in[i];
-    const uint d = nf_radix_digit(key, pc.shift);
-    const uint position = bin_base[d] + nf_radix_field(d, before_lo, before_hi) + nf_radix_field(d, seen_lo, seen_hi);
-    nf_radix_count(d, seen_lo, seen_hi);
-    keys_out[position] = key;
-    if (pc.has_values != 0u) values_out[position] = values_in[i];
+  if (first < last) {
+    uint i = first;
+    do {
+      const uint key = keys_in[i];
+      const uint d = nf_radix_digit(key, pc.shift);
+      const uint position = bin_base[d] + nf_radix_field(d, before_lo, before_hi) + nf_radix_field(d, seen_lo, seen_hi);
+      nf_radix_count(d, seen_lo, seen_hi);
+      keys_out[position] = key;
+      if (pc.has_values != 0u) values_out[position] = values_in[i];
+    } while (++i < last);
   }
 }

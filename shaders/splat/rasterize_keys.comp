@@ -34,8 +34,11 @@ void main() {
   const float opacity = proj[g * 12u + 5u];
   uint at = offsets[rank_of[g]];
   const uint stop = at + touched[g];
-  for (uint y = r0 >> 16; y <= (r1 >> 16); ++y)
-    for (uint x = r0 & 0xffffu; x <= (r1 & 0xffffu); ++x) {
+  // do-while: rasterize_fwd.comp says why. The rectangle is never empty.
+  uint y = r0 >> 16;
+  do {
+    uint x = r0 & 0xffffu;
+    do {
       vec2 lo, hi;
       nf_tile_rect(x, y, NF_TILE, pc.width, pc.height, lo, hi);
       if (at < stop && nf_ellipse_reaches(mean, conic, opacity, lo, hi)) {
@@ -43,9 +46,11 @@ void main() {
         values[at] = g;
         ++at;
       }
-    }
-  for (; at < stop; ++at) {
+    } while (++x <= (r1 & 0xffffu));
+  } while (++y <= (r1 >> 16));
+  while (at < stop) {  // only if the two passes disagreed
     keys[at] = pc.tiles;
     values[at] = g;
+    ++at;
   }
 }

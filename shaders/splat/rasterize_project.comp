@@ -39,12 +39,16 @@ void main() {
     const int y0 = clamp(int(floor((o[P_V] - r) / float(NF_TILE))), 0, nty - 1), y1 = clamp(int(floor((o[P_V] + r) / float(NF_TILE))), 0, nty - 1);
     const vec2 mean = vec2(o[P_U], o[P_V]);
     const vec3 conic = vec3(o[P_CA], o[P_CB], o[P_CC]);
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) {
+    // do-while: rasterize_fwd.comp says why. The rectangle is never empty.
+    int y = y0;
+    do {
+      int x = x0;
+      do {
         vec2 lo, hi;
         nf_tile_rect(uint(x), uint(y), NF_TILE, pc.width, pc.height, lo, hi);
         if (nf_ellipse_reaches(mean, conic, o[P_OPACITY], lo, hi)) ++count;
-      }
+      } while (++x <= x1);
+    } while (++y <= y1);
     r0 = uint(x0) | (uint(y0) << 16);
     r1 = uint(x1) | (uint(y1) << 16);
   }
