@@ -34,7 +34,7 @@ struct CountPush {
   std::uint32_t count;
 };
 struct KeysPush {
-  std::uint32_t count, tiles_x, tiles, width, height;
+  std::uint32_t count, tiles_x;
 };
 struct RangesPush {
   std::uint32_t count, tiles;
@@ -165,7 +165,7 @@ void StrandRasterizer::forward(const StrandShape& shape, gpu::BufferRange points
   ensure(ctx, m.sorted_touched, segments, "raster tiles touched in depth order");
   ensure(ctx, m.rank, segments, "raster depth rank");
   ensure(ctx, m.total, 1, "raster tile total");
-  ensure(ctx, m.rects, segments * 2, "raster tile rectangles");
+  ensure(ctx, m.rects, segments * 3, "raster tile rectangles");
   const std::uint32_t ntx = tiles_x(camera), nty = tiles_y(camera), tiles = ntx * nty;
   ensure(ctx, m.ranges, std::uint64_t(tiles) * 2, "raster tile ranges");
   ensure(ctx, m.final_t, pixels, "raster final transmittance");
@@ -180,7 +180,7 @@ void StrandRasterizer::forward(const StrandShape& shape, gpu::BufferRange points
       gpu::ScopedPass pass(stream, "splat/rasterize_project");
       stream.dispatch(ctx.kernel("splat/rasterize_project", {{0, 128}}),
                       {points, confidence, m.proj->range(0, segments * kProjected), m.touched->range(0, segments),
-                       m.rects->range(0, segments * 2)},
+                       m.rects->range(0, segments * 3)},
                       push, gpu::Elements(segments));
     }
     // Gaussians in depth order, then their tile counts in that order and the scan that places
@@ -211,17 +211,17 @@ void StrandRasterizer::forward(const StrandShape& shape, gpu::BufferRange points
     ensure(ctx, m.values, m.entries, "raster values");
     {
       gpu::ScopedPass pass(stream, "splat/rasterize_keys");
-      const KeysPush kp{std::uint32_t(segments), ntx, tiles, camera.width, camera.height};
+      const KeysPush kp{std::uint32_t(segments), ntx};
       stream.dispatch(ctx.kernel("splat/rasterize_keys", {{0, 128}}),
-                      {m.proj->range(0, segments * kProjected), m.offsets->range(0, segments), m.rects->range(0, segments * 2),
+                      {m.proj->range(0, segments * kProjected), m.offsets->range(0, segments), m.rects->range(0, segments * 3),
                        m.keys->range(0, m.entries), m.values->range(0, m.entries), m.touched->range(0, segments),
                        m.rank->range(0, segments)},
                       kp, gpu::Elements(segments));
     }
     {
-      // Tile indices up to `tiles` (unused slots): only those bits.
+      // Tile indices: only their bits.
       gpu::ScopedPass pass(stream, "splat/sort");
-      gpu::radix_sort(stream, m.keys->range(0, m.entries), m.values->range(0, m.entries), gpu::key_bits_for(tiles));
+      gpu::radix_sort(stream, m.keys->range(0, m.entries), m.values->range(0, m.entries), gpu::key_bits_for(tiles - 1));
     }
     {
       gpu::ScopedPass pass(stream, "splat/rasterize_ranges");

@@ -18,7 +18,7 @@ void main() {
   const uint i = nf_linear_index();
   if (i >= pc.count) return;
   const uint tile = keys[i];
-  if (tile >= pc.tiles) return;  // an unused slot (rasterize_keys), sorted past every tile
+  if (tile >= pc.tiles) return;  // a guard for the ranges buffer: keys are tile indices
   if (i == 0u || keys[i - 1u] != tile) ranges[2u * tile] = i;
   if (i + 1u == pc.count || keys[i + 1u] != tile) ranges[2u * tile + 1u] = i + 1u;
 }
