@@ -39,11 +39,16 @@ void main() {
   const uint total_blocks = o_blocks * k_blocks;
   const uint first_block = gl_WorkGroupID.y * pc.blocks_per_group;
   const uint slab_base = slab * WG * SLAB_ITEMS + gl_LocalInvocationID.x;
-  for (uint blk = first_block; blk < min(first_block + pc.blocks_per_group, total_blocks); ++blk) {
+  // Loops are do-while: on lavapipe a for loop runs one more masked body before it leaves, and
+  // these run once or a few times.
+  const uint last_block = min(first_block + pc.blocks_per_group, total_blocks);
+  uint blk = first_block;
+  if (blk < last_block) do {
     const uint o0 = (blk / k_blocks) * BO, k0 = (blk % k_blocks) * BK;
     vec4 acc[4u * BO * BK];  // acc[(a * 4 + j) * BK + b]: o = 4 (o0 + a) + j, k = 4 (k0 + b) + i
     for (uint e = 0u; e < 4u * BO * BK; ++e) acc[e] = vec4(0.0);
-    for (uint t = 0u; t < SLAB_ITEMS; ++t) {
+    uint t = 0u;
+    do {
       const uint s = slab_base + t * WG;
       if (s >= pc.batch) break;
       vec4 g[BO], xv[BK];
@@ -55,13 +60,14 @@ void main() {
       for (uint a = 0u; a < BO; ++a)
         for (uint j = 0u; j < 4u; ++j)
           for (uint b = 0u; b < BK; ++b) acc[(a * 4u + j) * BK + b] = fma(vec4(g[a][j]), xv[b], acc[(a * 4u + j) * BK + b]);
-    }
+    } while (++t < SLAB_ITEMS);
     for (uint e = 0u; e < 4u * BO * BK; ++e) {
       const vec4 sum = subgroupAdd(acc[e]);
       if (subgroupElect()) block_sums[gl_SubgroupID][e] = sum;
     }
     barrier();
-    for (uint e = gl_LocalInvocationIndex; e < 16u * BO * BK; e += WG) {
+    uint e = gl_LocalInvocationIndex;
+    if (e < 16u * BO * BK) do {
       const uint row = e / 4u, i = e % 4u;  // row = (a * 4 + j) * BK + b
       const uint b = row % BK, aj = row / BK, a = aj / 4u, j = aj % 4u;
       float total = 0.0;
@@ -71,7 +77,7 @@ void main() {
         if (k4 < pc.in4) partials[slab * layer_params + o * in_stride + 4u * k4 + i] = total;
         else if (i == 0u) partials[slab * layer_params + pc.out_dim * in_stride + o] = total;
       }
-    }
+    } while ((e += WG) < 16u * BO * BK);
     barrier();
-  }
+  } while (++blk < last_block);
 }
