@@ -27,7 +27,7 @@ constexpr std::uint32_t kMaxInferenceChunk = 1u << 16;
 struct ForwardPush {
   std::uint32_t batch, out4, out_dim, row_first, rows, activation;
   float beta, omega;
-  std::uint32_t store_z, has_bias, accumulate, w_base, w_stride4, x_stride4, x_first4;
+  std::uint32_t store_z, has_bias, accumulate, w_base, stride4, x_first4;
 };
 struct ActivationBackwardPush {
   std::uint32_t count, out_dim, out_stride, activation;
@@ -61,9 +61,13 @@ Mlp::Mlp(gpu::Context& context, const MlpConfig& config, const std::string& name
   gradients_->fill_u32(0);
 }
 
+std::uint64_t Mlp::weight_window4() const {
+  return std::min<std::uint64_t>(kWeightWindow4, context_.info().limits.max_uniform_buffer_range / 16);
+}
+
 std::uint32_t Mlp::columns_for(std::uint32_t in_stride) const {
   // mlp_forward's weight window: COLS rows of in_stride floats plus 16 vec4 of alignment slack.
-  const std::uint64_t capacity = std::min<std::uint64_t>(kWeightWindow4, context_.info().limits.max_uniform_buffer_range / 16);
+  const std::uint64_t capacity = weight_window4();
   for (std::uint32_t cols : {kPreferredColumns, 16u, 8u})
     if (std::uint64_t(cols) * (in_stride / 4) + 16 <= capacity) return cols;
   throw DeviceError("mlp: a layer with " + std::to_string(in_stride) + " inputs needs more uniform-buffer range than "
@@ -85,7 +89,7 @@ void Mlp::record_product(gpu::Stream& stream, const Product& p, gpu::BufferRange
       // Bind from an aligned offset at or before the block; the shader skips the difference.
       const std::uint64_t start = p.weight_offset + std::uint64_t(first) * p.in_stride + 4u * k4;
       const std::uint64_t base = start / align * align;
-      const std::uint64_t window = std::min<std::uint64_t>(kWeightWindow4 * 4, buffer_floats - base);
+      const std::uint64_t window = std::min<std::uint64_t>(weight_window4() * 4, buffer_floats - base);
       const ForwardPush push{batch,
                              p.out_stride / 4,
                              p.out_dim,
@@ -98,7 +102,6 @@ void Mlp::record_product(gpu::Stream& stream, const Product& p, gpu::BufferRange
                              first_chunk && p.biases.size ? 1u : 0u,
                              first_chunk ? 0u : 1u,
                              std::uint32_t((start - base) / 4),
-                             in4,
                              in4,
                              k4};
       stream.dispatch(k, {x, y, z, p.weights->range_bytes(base * 4, window * 4), p.biases}, push, gpu::Elements(batch));

@@ -72,6 +72,8 @@ class Mlp {
                             gpu::BufferRange z, std::uint32_t batch) const;
   // Output rows per invocation for inputs of this stride that fit the device's uniform buffers.
   std::uint32_t columns_for(std::uint32_t in_stride) const;
+  // vec4 in mlp_forward's uniform weight window on this device.
+  std::uint64_t weight_window4() const;
 
   gpu::Context& context_;
   MlpConfig config_;

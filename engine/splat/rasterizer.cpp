@@ -91,6 +91,33 @@ RasterCamera raster_camera(const io::Camera& camera, double near, double far) {
   return r;
 }
 
+namespace {
+
+// Compositing is laid out for GPUs (one pixel per invocation; backward sums through shared-memory
+// atomics where the device has them) or for CPU devices such as lavapipe (four pixels per
+// invocation, a column of rows, so a subgroup sum covers a Gaussian's gradient over 32 pixels
+// instead of 8; subgroup sums straight to global atomics, since shared atomics there are per-lane
+// loops and barriers switch coroutines). On lavapipe the CPU layout is 2x faster forward and 2.5x
+// backward. NF_SPLAT_GPU_LAYOUT=1 takes the GPU layout on any device, so that CI runs it.
+bool choose_gpu_layout(const gpu::Context& ctx) {
+  if (const char* env = std::getenv("NF_SPLAT_GPU_LAYOUT"); env && *env) {
+    const std::string v = env;
+    if (v != "0" && v != "1") throw InputError("NF_SPLAT_GPU_LAYOUT is '" + v + "'; use 0 or 1");
+    if (v == "1") return true;
+  }
+  return !ctx.info().is_cpu();
+}
+
+std::uint32_t pixels_per_invocation(bool gpu_layout) { return gpu_layout ? 1 : 4; }
+
+std::uint32_t composite_workgroup(bool gpu_layout) { return kTile * kTile / pixels_per_invocation(gpu_layout); }
+
+std::vector<gpu::SpecConstant> composite_spec(bool gpu_layout) {
+  return {{0, composite_workgroup(gpu_layout)}, {1, pixels_per_invocation(gpu_layout)}};
+}
+
+}  // namespace
+
 struct StrandRasterizer::Impl {
   gpu::Context& context;
   std::unique_ptr<gpu::Buffer<float>> proj, grad_proj, grad_segment, final_t, no_body;
@@ -103,37 +130,12 @@ struct StrandRasterizer::Impl {
   gpu::BufferRange points, body;
   std::uint64_t entries = 0;
   bool has_body = false;
-  explicit Impl(gpu::Context& c) : context(c) {}
+  const bool gpu_layout;  // chosen once, so that forward and backward agree
+  explicit Impl(gpu::Context& c) : context(c), gpu_layout(choose_gpu_layout(c)) {}
 };
 
 StrandRasterizer::StrandRasterizer(gpu::Context& context) : impl_(std::make_unique<Impl>(context)) {}
 StrandRasterizer::~StrandRasterizer() = default;
-namespace {
-
-// Compositing is laid out for GPUs (one pixel per invocation; backward sums through shared-memory
-// atomics where the device has them) or for CPU devices such as lavapipe (four pixels per
-// invocation, a column of rows, so a subgroup sum covers a Gaussian's gradient over 32 pixels
-// instead of 8; subgroup sums straight to global atomics, since shared atomics there are per-lane
-// loops and barriers switch coroutines). On lavapipe the CPU layout is 2x faster forward and 2.5x
-// backward. NF_SPLAT_GPU_LAYOUT=1 takes the GPU layout on any device, so that CI runs it.
-bool gpu_layout(const gpu::Context& ctx) {
-  if (const char* env = std::getenv("NF_SPLAT_GPU_LAYOUT"); env && *env) {
-    const std::string v = env;
-    if (v != "0" && v != "1") throw InputError("NF_SPLAT_GPU_LAYOUT is '" + v + "'; use 0 or 1");
-    if (v == "1") return true;
-  }
-  return !ctx.info().is_cpu();
-}
-
-std::uint32_t pixels_per_invocation(const gpu::Context& ctx) { return gpu_layout(ctx) ? 1 : 4; }
-
-std::uint32_t composite_workgroup(const gpu::Context& ctx) { return kTile * kTile / pixels_per_invocation(ctx); }
-
-std::vector<gpu::SpecConstant> composite_spec(const gpu::Context& ctx) {
-  return {{0, composite_workgroup(ctx)}, {1, pixels_per_invocation(ctx)}};
-}
-
-}  // namespace
 
 std::uint64_t StrandRasterizer::tile_entries() const { return impl_->entries; }
 
@@ -235,11 +237,11 @@ void StrandRasterizer::forward(const StrandShape& shape, gpu::BufferRange points
   {
     gpu::ScopedPass pass(stream, "splat/rasterize_fwd");
     const CompositePush cp{camera.width, camera.height, ntx, m.has_body ? 1u : 0u};
-    stream.dispatch(ctx.kernel("splat/rasterize_fwd", composite_spec(ctx)),
+    stream.dispatch(ctx.kernel("splat/rasterize_fwd", composite_spec(m.gpu_layout)),
                     {m.proj->range(0, segments * kProjected), m.values->range(0, std::max<std::uint64_t>(m.entries, 1)),
                      m.ranges->range(0, std::uint64_t(tiles) * 2), m.body, image, m.final_t->range(0, pixels),
                      m.last->range(0, pixels)},
-                    cp, gpu::Elements(std::uint64_t(tiles) * composite_workgroup(ctx)));
+                    cp, gpu::Elements(std::uint64_t(tiles) * composite_workgroup(m.gpu_layout)));
   }
   stream.submit_and_wait();
 }
@@ -264,13 +266,13 @@ void StrandRasterizer::backward(gpu::Stream& stream, gpu::BufferRange grad_image
     const CompositePush cp{camera.width, camera.height, ntx, m.has_body ? 1u : 0u};
     // Shared-memory sums in the GPU layout where the device has shared float atomics (gpu_layout;
     // NF_NO_SHARED_FLOAT_ATOMICS=1 takes them away).
-    const bool shared_sums = gpu_layout(ctx) && ctx.info().features.float32_atomic_add_shared;
+    const bool shared_sums = m.gpu_layout && ctx.info().features.float32_atomic_add_shared;
     const char* variant = shared_sums ? "splat/rasterize_bwd:shared" : "splat/rasterize_bwd:subgroup";
-    stream.dispatch(ctx.kernel(variant, composite_spec(ctx)),
+    stream.dispatch(ctx.kernel(variant, composite_spec(m.gpu_layout)),
                     {m.proj->range(0, segments * kProjected), m.values->range(0, std::max<std::uint64_t>(m.entries, 1)),
                      m.ranges->range(0, std::uint64_t(tiles) * 2), m.body, m.final_t->range(0, pixels),
                      m.last->range(0, pixels), grad_image, m.grad_proj->range(0, segments * kProjected)},
-                    cp, gpu::Elements(std::uint64_t(tiles) * composite_workgroup(ctx)));
+                    cp, gpu::Elements(std::uint64_t(tiles) * composite_workgroup(m.gpu_layout)));
   }
   {
     gpu::ScopedPass pass(stream, "splat/rasterize_project_bwd");

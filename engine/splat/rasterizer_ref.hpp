@@ -59,7 +59,9 @@ struct RasterParams {
 
 inline std::uint32_t tiles_x(const RasterCamera& c) { return (c.width + kTile - 1) / kTile; }
 inline std::uint32_t tiles_y(const RasterCamera& c) { return (c.height + kTile - 1) / kTile; }
-// Bits of the (tile, depth) sort key given to the tile index; the rest order depth.
+// Bits of a tile index. Depth is quantised to the remaining 32 - tile_bits bits: the layout of an
+// earlier combined (tile, depth) sort key, kept because it fixes which near-equal depths tie (ties
+// keep index order), and the GPU sorts (depth, then tile) must tie the same way.
 inline std::uint32_t tile_bits(const RasterCamera& c) {
   std::uint32_t bits = 1, tiles = tiles_x(c) * tiles_y(c);
   while ((1u << bits) < tiles) ++bits;

@@ -1,11 +1,12 @@
 // Shared pieces of the compositing kernels of strand rasterisation: one workgroup per tile
-// (nf_splat_tile.glsl), invocation i shades pixel (i % NF_TILE, i / NF_TILE) of it. Constants and
-// rules as in engine/splat/rasterizer_ref.hpp (composite, composite_adjoint).
+// (nf_splat_tile.glsl), invocation i shades the PPI pixels (i % NF_TILE, (i / NF_TILE) * PPI + r),
+// r < PPI, of it. Constants and rules as in engine/splat/rasterizer_ref.hpp (composite,
+// composite_adjoint).
 //
 // How a tile's Gaussians reach its pixels: the list is walked in batches of one Gaussian per lane
 // of a subgroup; every lane loads its Gaussian into registers, tests whether it can reach any pixel
-// of the subgroup (nf_reaches_subgroup), and a ballot of that test drives a loop that broadcasts
-// only those Gaussians to all lanes. No shared memory, no barriers. On lavapipe this matters twice:
+// of the subgroup (nf_reaches), and a ballot of that test drives a loop that broadcasts only those
+// Gaussians to all lanes: no shared memory and no barriers in that walk. On lavapipe this matters twice:
 // a shared-memory read inside a loop is a per-lane loop of scalar loads even at a uniform address
 // (a broadcast is one extract), and code under a branch runs for every lane anyway (masked), so
 // the only work skipped is loop iterations that never start: a fur Gaussian covers a row or two
@@ -73,7 +74,8 @@ void nf_subgroup_rect(vec2 first, vec2 last, out vec2 lo, out vec2 hi) {
   hi = vec2(subgroupMax(max(first.x, last.x)), subgroupMax(max(first.y, last.y)));
 }
 
-// Lanes in this subgroup: the batch size (a workgroup smaller than a subgroup fills part of one).
-uint nf_subgroup_lanes() { return subgroupBallotBitCount(subgroupBallot(true)); }
+// Active lanes in this subgroup: the batch size (a workgroup smaller than a subgroup fills part of
+// one). Unlike nf_workgroup.glsl's nf_subgroup_lanes it needs no workgroup size.
+uint nf_active_lanes() { return subgroupBallotBitCount(subgroupBallot(true)); }
 
 #endif

@@ -27,8 +27,9 @@ layout(local_size_x_id = 0) in;
 layout(std430, binding = 0) readonly buffer Input { vec4 x[]; };           // [batch][x_stride4]
 layout(std430, binding = 1) buffer Output { vec4 y[]; };                   // [batch][out4]
 layout(std430, binding = 2) writeonly buffer PreActivation { vec4 z[]; };  // Sine layers in training
-// This dispatch's rows, w_stride4 vec4 apart, from vec4 w_base on: the binding starts at an offset
-// the device accepts and w_base covers the rest; it spans up to 64 KiB (or the buffer's end).
+// This dispatch's rows, stride4 vec4 apart, from vec4 w_base on: the binding starts at an offset
+// the device accepts and w_base covers the rest; it spans up to 64 KiB (less where the device's
+// uniform range or the buffer ends sooner).
 layout(std140, binding = 12) uniform Weights { vec4 w[4096]; };
 layout(std140, binding = 13) uniform Biases { vec4 b4[256]; };             // the layer's biases
 
@@ -45,8 +46,7 @@ layout(push_constant) uniform Push {
   uint has_bias;
   uint accumulate;  // add to y instead of overwriting
   uint w_base;      // first vec4 of this dispatch's block in the weights binding
-  uint w_stride4;   // vec4 between weight rows
-  uint x_stride4;   // vec4 between input rows
+  uint stride4;     // vec4 per input row: between rows of x and between weight rows
   uint x_first4;    // first input vec4 of this chunk
 } pc;
 
@@ -55,14 +55,15 @@ void main() {
   const uint s = min(index, pc.batch - 1u);
   float acc[COLS];
   [[unroll]] for (uint c = 0u; c < COLS; ++c) {
-    const uint o = min(pc.row_first + c, pc.out_dim - 1u);
+    // Without biases the binding is a small placeholder: read its first entry (and discard it).
+    const uint o = pc.has_bias != 0u ? min(pc.row_first + c, pc.out_dim - 1u) : 0u;
     const float bias = b4[o >> 2][o & 3u];
     acc[c] = pc.has_bias != 0u ? bias : 0.0;
   }
   [[unroll]] for (uint k4 = 0u; k4 < IN4; ++k4) {
-    const vec4 xv = x[s * pc.x_stride4 + pc.x_first4 + k4];
+    const vec4 xv = x[s * pc.stride4 + pc.x_first4 + k4];
     [[unroll]] for (uint c = 0u; c < COLS; ++c) {
-      const vec4 wv = w[pc.w_base + min(c, pc.rows - 1u) * pc.w_stride4 + k4];
+      const vec4 wv = w[pc.w_base + min(c, pc.rows - 1u) * pc.stride4 + k4];
       acc[c] = fma(xv.x, wv.x, fma(xv.y, wv.y, fma(xv.z, wv.z, fma(xv.w, wv.w, acc[c]))));
     }
   }

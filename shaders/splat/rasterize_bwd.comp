@@ -116,12 +116,14 @@ void main() {
   }
   vec2 lo, hi;
   nf_subgroup_rect(q[0], q[PPI - 1u], lo, hi);
-  const uint lane = gl_SubgroupInvocationID, lanes = nf_subgroup_lanes();
+  const uint lane = gl_SubgroupInvocationID, lanes = nf_active_lanes();
   // Where the forward stopped (every pixel opaque) nothing behind contributed: start there. In
   // dense fur most of a tile's list lies behind it.
   const uint subgroup_last = subgroupMax(lane_last);
 #ifdef NF_SHARED_SUMS
   // The shared sums need every subgroup on the same batches: start at the tile's furthest point.
+  // (Batches are one subgroup long; the subgroups of a workgroup have the same size, since it is a
+  // whole number of them or part of one.)
   if (gl_LocalInvocationIndex == 0u) s_used = 0u;
   for (uint i = gl_LocalInvocationIndex; i < FIELDS * WG; i += WG) s_grad[i / WG][i % WG] = 0.0;
   barrier();

@@ -4,7 +4,8 @@
 // and far planes, as a sort key with its index as the value. Sorting the Gaussians by depth once
 // and their tile entries by tile afterwards (stable) gives the (tile, depth, index) order with
 // far fewer digit passes than sorting every entry by tile and depth: 1.5 M depth keys and 4.4 M
-// tile keys at 512x512 for fur. Culled Gaussians (no tiles) sort last.
+// tile keys at 512x512 for fur. Culled Gaussians sort last (a Gaussian that reaches no tile sorts
+// by its depth and writes no entries).
 
 layout(constant_id = 0) const uint WG = 128;
 layout(local_size_x_id = 0) in;

@@ -74,7 +74,7 @@ void main() {
   vec2 lo, hi;
   nf_subgroup_rect(q[0], q[PPI - 1u], lo, hi);
   const uint start = ranges[2u * tile], end = ranges[2u * tile + 1u];
-  const uint lane = gl_SubgroupInvocationID, lanes = nf_subgroup_lanes();
+  const uint lane = gl_SubgroupInvocationID, lanes = nf_active_lanes();
   // Loops are do-while on purpose: on lavapipe a while or for loop runs its body once more, masked,
   // before it leaves (its exit test sits at the top); a do-while tests at the bottom.
   uint first = start;
