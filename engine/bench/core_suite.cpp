@@ -5,6 +5,7 @@
 #include <random>
 
 #include "engine/bench/record.hpp"
+#include "engine/core/error.hpp"
 #include "engine/core/progress.hpp"
 #include "engine/gpu/kernel.hpp"
 #include "engine/gpu/radix_sort.hpp"
@@ -213,6 +214,13 @@ json scan_reduce_records(gpu::Context& ctx, bool quick, int repeats) {
 double measure_fma_gflops(gpu::Context& context, bool quick) {
   const json r = fma_record(context, quick, 3);
   return r["metrics"]["GFLOPs_wall"].get<double>();
+}
+
+double measure_copy_traffic_gbps(gpu::Context& context, bool quick) {
+  const json records = copy_records(context, quick, 3);
+  for (const json& r : records)
+    if (r["case"] == "copy_shader") return 2 * r["metrics"]["GBps_wall"].get<double>();
+  throw InternalError("bench: no copy_shader record");
 }
 
 json run_core_suite(gpu::Context& context, const Options& options) {

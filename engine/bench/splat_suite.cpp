@@ -7,8 +7,10 @@
 #include "engine/body/quadruped.hpp"
 #include "engine/core/progress.hpp"
 #include "engine/gpu/buffer.hpp"
+#include "engine/gpu/radix_sort.hpp"
 #include "engine/knowledge/knowledge.hpp"
 #include "engine/splat/rasterizer.hpp"
+#include "engine/splat/rasterizer_ref.hpp"
 #include "engine/synth/camera_rig.hpp"
 #include "engine/synth/fur_growth.hpp"
 #include "engine/synth/strand_renderer.hpp"
@@ -53,6 +55,7 @@ json run_splat_suite(gpu::Context& ctx, const Options& options) {
   const std::uint32_t strands = options.quick ? 2000 : 15000, points = options.quick ? 32 : 100;
   const int repeats = options.quick ? 2 : 3;
   const double fma = measure_fma_gflops(ctx, options.quick);
+  const double traffic_roof = measure_copy_traffic_gbps(ctx, options.quick);
   const Scene scene = make_scene(strands, points);
   const splat::StrandShape shape{strands, points};
   const splat::RasterParams rp;  // the paper's width 0.0025 and length scale 0.5
@@ -112,6 +115,15 @@ json run_splat_suite(gpu::Context& ctx, const Options& options) {
     // its share of that rate says how much the skipping buys, not how busy the FMA units are.
     const double composite_flops = entries * splat::kTile * splat::kTile * 20;
     const double fwd_composite_ms = fwd_passes.count("splat/rasterize_fwd") ? fwd_passes.at("splat/rasterize_fwd") : 0;
+    // The two sorts are bandwidth-bound: per 4-bit digit pass each key-value pair is read by the
+    // histogram (4 bytes) and read and written by the scatter (16 bytes).
+    const auto passes_of = [](std::uint32_t bits) { return double((bits + 3) / 4); };
+    const std::uint32_t tiles = splat::tiles_x(rc) * splat::tiles_y(rc);
+    const double sort_bytes = entries * 20 * passes_of(gpu::key_bits_for(tiles - 1)) +
+                              double(shape.segments()) * 20 * passes_of(splat::depth_bits(rc));
+    const double sort_ms = (fwd_passes.count("splat/sort") ? fwd_passes.at("splat/sort") : 0) +
+                           (fwd_passes.count("splat/sort_depth") ? fwd_passes.at("splat/sort_depth") : 0);
+    const double sort_gbps = sort_ms > 0 ? sort_bytes / (sort_ms * 1e-3) / 1e9 : 0.0;
     json passes_f = json::object(), passes_b = json::object();
     for (const auto& [k, v] : fwd_passes) passes_f[k] = v;
     for (const auto& [k, v] : both_passes) passes_b[k] = v;
@@ -126,6 +138,9 @@ json run_splat_suite(gpu::Context& ctx, const Options& options) {
                  {"composite_dense_equivalent_GFLOPs", fwd_composite_ms > 0 ? composite_flops / (fwd_composite_ms * 1e-3) / 1e9 : 0.0},
                  {"composite_dense_equivalent_fraction_of_fma", fwd_composite_ms > 0 ? composite_flops / (fwd_composite_ms * 1e-3) / 1e9 / fma : 0.0},
                  {"device_fma_GFLOPs", fma},
+                 {"sort_traffic_GBps", sort_gbps},
+                 {"sort_fraction_of_copy_traffic", sort_gbps / traffic_roof},
+                 {"device_copy_traffic_GBps", traffic_roof},
                  {"silhouette_mae_vs_raytraced", abs_err / double(pixels)},
                  {"silhouette_area_ratio_vs_raytraced", covered > 0 ? splatted / covered : 0.0}};
     json params{{"strands", strands}, {"points_per_strand", points}, {"width", w}, {"height", h},
