@@ -244,10 +244,7 @@ TEST_CASE("a sphere on an anisotropic grid, and the iso-value shifts the surface
 TEST_CASE("a torus has Euler characteristic 0") {
   const double R = 0.6, r = 0.22;
   const int n = 64;
-  const Grid g = test::sample_grid({n, n, n}, glm::vec3(-1.f), glm::vec3(2.f / float(n - 1)), [&](glm::dvec3 p) {
-    const double q = std::sqrt(p.x * p.x + p.z * p.z) - R;
-    return std::sqrt(q * q + p.y * p.y) - r;
-  });
+  const Grid g = test::sample_grid({n, n, n}, glm::vec3(-1.f), glm::vec3(2.f / float(n - 1)), [&](glm::dvec3 p) { return test::torus_sdf(p, R, r); });
   const io::Mesh m = extract(g);
   CHECK(is_closed_manifold(m));
   CHECK(euler_characteristic(m) == 0);

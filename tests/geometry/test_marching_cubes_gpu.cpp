@@ -168,10 +168,7 @@ TEST_CASE("gpu marching cubes: a sphere on an anisotropic grid gives the CPU mes
 TEST_CASE("gpu marching cubes: a torus gives the CPU mesh, closed") {
   const double R = 0.6, r = 0.22;
   const int n = 56;
-  const Grid g = test::sample_grid({n, n, n}, glm::vec3(-1.f), glm::vec3(2.f / float(n - 1)), [&](glm::dvec3 p) {
-    const double q = std::sqrt(p.x * p.x + p.z * p.z) - R;
-    return std::sqrt(q * q + p.y * p.y) - r;
-  });
+  const Grid g = test::sample_grid({n, n, n}, glm::vec3(-1.f), glm::vec3(2.f / float(n - 1)), [&](glm::dvec3 p) { return test::torus_sdf(p, R, r); });
   const io::Mesh cpu = cpu_mesh(g), got = gpu_mesh(g);
   REQUIRE(cpu.triangle_count() > 1000);
   check_same_mesh(got, cpu, g);

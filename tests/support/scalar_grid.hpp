@@ -1,5 +1,6 @@
 #pragma once
 // A scalar field sampled on a regular grid (x fastest), as the marching-cubes suites feed it.
+#include <cmath>
 #include <cstddef>
 #include <vector>
 
@@ -23,6 +24,12 @@ ScalarGrid sample_grid(glm::ivec3 dims, glm::vec3 origin, glm::vec3 h, F field) 
     for (int y = 0; y < dims.y; ++y)
       for (int x = 0; x < dims.x; ++x) g.values.push_back(float(field(glm::dvec3(g.at(x, y, z)))));
   return g;
+}
+
+// Signed distance to a torus around the y axis: major radius R, tube radius r.
+inline double torus_sdf(glm::dvec3 p, double R, double r) {
+  const double q = std::sqrt(p.x * p.x + p.z * p.z) - R;
+  return std::sqrt(q * q + p.y * p.y) - r;
 }
 
 }  // namespace nf::test
