@@ -1,6 +1,7 @@
 #pragma once
 // Splitting arrays into ranges a kernel binding may cover (maxStorageBufferRange, 128 MiB on
-// lavapipe), with every chunk starting on minStorageBufferOffsetAlignment.
+// lavapipe), with every chunk starting on minStorageBufferOffsetAlignment (and on
+// minTexelBufferOffsetAlignment, so a chunk may also be bound as a texel buffer).
 #include <algorithm>
 #include <cstdint>
 #include <initializer_list>
@@ -25,11 +26,13 @@ inline BufferRange sub_range(BufferRange range, std::uint64_t element_bytes, std
 }
 
 // Items (strands, rays...) per chunk when each item owns `bytes_per_item` bytes in several arrays:
-// every array's chunk fits one binding and every chunk starts on the offset alignment.
+// every array's chunk fits one storage or RGBA32F texel binding and starts on both alignments.
 inline std::uint64_t items_per_chunk(const Context& context, std::initializer_list<std::uint64_t> bytes_per_item) {
   const DeviceLimits& l = context.info().limits;
-  const std::uint64_t align = std::max<std::uint64_t>(1, l.min_storage_buffer_offset_alignment);
-  const std::uint64_t range = std::min<std::uint64_t>(l.max_storage_buffer_range, 1ull << 32);
+  const std::uint64_t align = std::lcm(std::max<std::uint64_t>(1, l.min_storage_buffer_offset_alignment),
+                                       std::max<std::uint64_t>(1, l.min_texel_buffer_offset_alignment));
+  std::uint64_t range = std::min<std::uint64_t>(l.max_storage_buffer_range, 1ull << 32);
+  if (l.max_texel_buffer_elements) range = std::min<std::uint64_t>(range, l.max_texel_buffer_elements * 16);
   std::uint64_t step = 1, most = ~0ull;
   for (const std::uint64_t b : bytes_per_item) {
     if (b == 0) continue;

@@ -250,11 +250,17 @@ Context::Context(const ContextOptions& options) : impl_(std::make_unique<Impl>()
     // over the lanes.
     m.storage_slots = std::min<std::uint32_t>(kUniformBindingBase, m.info.limits.max_storage_buffers_per_stage);
     m.uniform_slots = std::min<std::uint32_t>(4, m.info.limits.max_uniform_buffers_per_stage);
+    // Uniform texel buffers exist for data each lane reads at its own address: on lavapipe a texel
+    // fetch is a straight-line gather, a storage-buffer load a per-lane loop with bounds checks.
+    m.texel_slots = std::min<std::uint32_t>(4, m.info.limits.max_sampled_images_per_stage);
     std::vector<VkDescriptorSetLayoutBinding> bindings;
     for (std::uint32_t b = 0; b < m.storage_slots; ++b)
       bindings.push_back({b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr});
     for (std::uint32_t b = 0; b < m.uniform_slots; ++b)
       bindings.push_back({kUniformBindingBase + b, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr});
+    for (std::uint32_t b = 0; b < m.texel_slots; ++b)
+      bindings.push_back({kTexelBindingBase + b, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT,
+                          nullptr});
     VkDescriptorSetLayoutCreateInfo set_info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     if (m.tuning.use_push_descriptors) set_info.flags = VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR;
     set_info.bindingCount = std::uint32_t(bindings.size());

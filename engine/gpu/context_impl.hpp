@@ -41,12 +41,14 @@ struct Context::Impl {
   VkPipelineCache pipeline_cache = VK_NULL_HANDLE;
 
   // One descriptor-set layout shared by every kernel: `storage_slots` storage buffers at bindings
-  // 0.. and `uniform_slots` uniform buffers at kUniformBindingBase.., and one pipeline layout with a
+  // 0.., `uniform_slots` uniform buffers at kUniformBindingBase.., `texel_slots` uniform texel
+  // buffers at kTexelBindingBase.., and one pipeline layout with a
   // push-constant range of `push_constant_bytes`.
   VkDescriptorSetLayout set_layout = VK_NULL_HANDLE;
   VkPipelineLayout pipeline_layout = VK_NULL_HANDLE;
   std::uint32_t storage_slots = 0;
   std::uint32_t uniform_slots = 0;
+  std::uint32_t texel_slots = 0;
   std::uint32_t push_constant_bytes = 0;
 
   PFN_vkCmdPushDescriptorSetKHR push_descriptor = nullptr;

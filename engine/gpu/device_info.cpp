@@ -66,6 +66,9 @@ DeviceInfo describe_device(VkPhysicalDevice device, std::uint32_t index) {
   lim.max_uniform_buffer_range = l.maxUniformBufferRange;
   lim.min_uniform_buffer_offset_alignment = l.minUniformBufferOffsetAlignment;
   lim.max_uniform_buffers_per_stage = l.maxPerStageDescriptorUniformBuffers;
+  lim.max_texel_buffer_elements = l.maxTexelBufferElements;
+  lim.min_texel_buffer_offset_alignment = l.minTexelBufferOffsetAlignment;
+  lim.max_sampled_images_per_stage = l.maxPerStageDescriptorSampledImages;
   lim.subgroup_size = subgroup.subgroupSize;
   lim.timestamp_period_ns = l.timestampPeriod;
 
@@ -131,6 +134,8 @@ json to_json(const DeviceInfo& info) {
         {"max_storage_buffers_per_stage", l.max_storage_buffers_per_stage},
         {"max_uniform_buffer_range", l.max_uniform_buffer_range},
         {"min_uniform_buffer_offset_alignment", l.min_uniform_buffer_offset_alignment},
+        {"max_texel_buffer_elements", l.max_texel_buffer_elements},
+        {"min_texel_buffer_offset_alignment", l.min_texel_buffer_offset_alignment},
         {"subgroup_size", l.subgroup_size},
         {"timestamp_period_ns", l.timestamp_period_ns}}},
       {"features",

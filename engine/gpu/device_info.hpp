@@ -24,6 +24,9 @@ struct DeviceLimits {
   std::uint64_t max_uniform_buffer_range = 0;
   std::uint64_t min_uniform_buffer_offset_alignment = 0;
   std::uint32_t max_uniform_buffers_per_stage = 0;
+  std::uint64_t max_texel_buffer_elements = 0;
+  std::uint64_t min_texel_buffer_offset_alignment = 0;
+  std::uint32_t max_sampled_images_per_stage = 0;  // uniform texel buffers count here
   std::uint32_t subgroup_size = 0;
   double timestamp_period_ns = 0;  // nanoseconds per timestamp tick
 };

@@ -25,13 +25,18 @@ const Kernel& Context::kernel(const std::string& shader_name, const std::vector<
   const auto words = find_shader(shader_name);
   KernelLayout layout = reflect_spirv(words, shader_name);
   const DeviceInfo& d = m.info;
-  const auto uniforms = std::count_if(layout.bindings.begin(), layout.bindings.end(),
-                                     [](const BindingInfo& b) { return b.uniform; });
-  const auto storages = std::int64_t(layout.bindings.size()) - uniforms;
-  if (storages > std::int64_t(m.storage_slots) || uniforms > std::int64_t(m.uniform_slots))
-    throw DeviceError("kernel '" + shader_name + "' uses " + std::to_string(storages) + " storage and " +
-                      std::to_string(uniforms) + " uniform buffers; the shared layout on '" + d.name + "' has " +
-                      std::to_string(m.storage_slots) + " and " + std::to_string(m.uniform_slots));
+  const auto count_kind = [&](BindingKind kind) {
+    return std::int64_t(std::count_if(layout.bindings.begin(), layout.bindings.end(),
+                                      [kind](const BindingInfo& b) { return b.kind == kind; }));
+  };
+  const std::int64_t storages = count_kind(BindingKind::storage), uniforms = count_kind(BindingKind::uniform),
+                     texels = count_kind(BindingKind::texel);
+  if (storages > std::int64_t(m.storage_slots) || uniforms > std::int64_t(m.uniform_slots) ||
+      texels > std::int64_t(m.texel_slots))
+    throw DeviceError("kernel '" + shader_name + "' uses " + std::to_string(storages) + " storage, " +
+                      std::to_string(uniforms) + " uniform and " + std::to_string(texels) +
+                      " texel buffers; the shared layout on '" + d.name + "' has " + std::to_string(m.storage_slots) +
+                      ", " + std::to_string(m.uniform_slots) + " and " + std::to_string(m.texel_slots));
   if (layout.push_constant_size > m.push_constant_bytes)
     throw DeviceError("kernel '" + shader_name + "' needs " + std::to_string(layout.push_constant_size) +
                       " bytes of push constants; device '" + d.name + "' allows " + std::to_string(m.push_constant_bytes));

@@ -12,15 +12,15 @@ namespace {
 // SPIR-V opcodes and enums used here (stable across SPIR-V versions; spec section 3).
 enum : std::uint32_t {
   OpCapability = 17, OpExecutionMode = 16, OpTypeBool = 20, OpTypeInt = 21, OpTypeFloat = 22,
-  OpTypeVector = 23, OpTypeMatrix = 24, OpTypeArray = 28, OpTypeStruct = 30, OpTypePointer = 32,
+  OpTypeVector = 23, OpTypeMatrix = 24, OpTypeImage = 25, OpTypeSampledImage = 27, OpTypeArray = 28, OpTypeStruct = 30, OpTypePointer = 32,
   OpConstant = 43, OpSpecConstantTrue = 48, OpSpecConstantFalse = 49, OpSpecConstant = 50,
   OpSpecConstantComposite = 51, OpVariable = 59, OpDecorate = 71, OpMemberDecorate = 72,
   OpExecutionModeId = 331,
   DecSpecId = 1, DecBuiltIn = 11, DecNonWritable = 24, DecNonReadable = 25, DecBinding = 33,
   DecDescriptorSet = 34, DecOffset = 35, DecArrayStride = 6, DecMatrixStride = 7,
   BuiltInWorkgroupSize = 25, ExecModeLocalSize = 17, ExecModeLocalSizeId = 38,
-  StorageUniform = 2, StoragePushConstant = 9, StorageStorageBuffer = 12,
-  CapFloat16 = 9, CapInt64 = 11, CapAtomicFloat32AddEXT = 6033,
+  StorageUniformConstant = 0, StorageUniform = 2, StoragePushConstant = 9, StorageStorageBuffer = 12,
+  DimBuffer = 5, CapFloat16 = 9, CapInt64 = 11, CapAtomicFloat32AddEXT = 6033,
 };
 
 struct Type {
@@ -29,6 +29,14 @@ struct Type {
 };
 
 }  // namespace
+
+const char* binding_kind_name(BindingKind kind) {
+  switch (kind) {
+    case BindingKind::uniform: return "uniform buffer";
+    case BindingKind::texel: return "texel buffer";
+    default: return "storage buffer";
+  }
+}
 
 KernelLayout reflect_spirv(std::span<const std::uint32_t> words, const std::string& name) {
   if (words.size() < 5 || words[0] != 0x07230203u)
@@ -65,7 +73,7 @@ KernelLayout reflect_spirv(std::span<const std::uint32_t> words, const std::stri
         if (w[2] == ExecModeLocalSizeId) throw InternalError("shader '" + name + "': LocalSizeId is not supported");
         break;
       case OpTypeBool: case OpTypeInt: case OpTypeFloat: case OpTypeVector: case OpTypeMatrix:
-      case OpTypeArray: case OpTypeStruct: case OpTypePointer:
+      case OpTypeArray: case OpTypeStruct: case OpTypePointer: case OpTypeImage: case OpTypeSampledImage:
         types[w[1]] = Type{op, std::vector<std::uint32_t>(w + 2, w + count)};
         break;
       case OpConstant: case OpSpecConstant:
@@ -147,6 +155,19 @@ KernelLayout reflect_spirv(std::span<const std::uint32_t> words, const std::stri
     const std::uint32_t pointee = ptr->second.operands[1];
     if (v.storage == StoragePushConstant) {
       layout.push_constant_size = size_of(pointee, 0, 0);
+    } else if (v.storage == StorageUniformConstant) {
+      // Only sampled buffer images (samplerBuffer / textureBuffer) are supported: uniform texel buffers.
+      if (!bindings.count(v.id)) continue;
+      if (sets[v.id] != 0) throw InternalError("shader '" + name + "': only descriptor set 0 is supported");
+      std::uint32_t image = pointee;
+      if (types.count(image) && types[image].op == OpTypeSampledImage) image = types[image].operands[0];
+      const auto t = types.find(image);
+      // OpTypeImage operands after the result: sampled type, Dim, Depth, Arrayed, MS, Sampled, format.
+      if (t == types.end() || t->second.op != OpTypeImage || t->second.operands[1] != DimBuffer ||
+          t->second.operands[5] != 1)
+        throw InternalError("shader '" + name + "': binding " + std::to_string(bindings[v.id]) +
+                            " is an image or sampler; only samplerBuffer (a uniform texel buffer) is supported");
+      layout.bindings.push_back({bindings[v.id], BindingKind::texel, true, false});
     } else if (v.storage == StorageStorageBuffer || v.storage == StorageUniform) {
       if (!bindings.count(v.id)) continue;
       if (sets[v.id] != 0) throw InternalError("shader '" + name + "': only descriptor set 0 is supported");
@@ -157,18 +178,21 @@ KernelLayout reflect_spirv(std::span<const std::uint32_t> words, const std::stri
       const bool uniform = v.storage == StorageUniform;
       const bool ro = uniform || non_writable[v.id] || (members && members_non_writable[pointee] == members);
       const bool wo = !uniform && (non_readable[v.id] || (members && members_non_readable[pointee] == members));
-      layout.bindings.push_back({bindings[v.id], uniform, !wo, !ro});
+      layout.bindings.push_back({bindings[v.id], uniform ? BindingKind::uniform : BindingKind::storage, !wo, !ro});
     }
   }
   std::sort(layout.bindings.begin(), layout.bindings.end(),
             [](const BindingInfo& a, const BindingInfo& b) { return a.binding < b.binding; });
-  std::uint32_t next_storage = 0, next_uniform = kUniformBindingBase;
+  std::uint32_t next_storage = 0, next_uniform = kUniformBindingBase, next_texel = kTexelBindingBase;
   for (const BindingInfo& b : layout.bindings) {
-    std::uint32_t& expected = b.uniform ? next_uniform : next_storage;
+    std::uint32_t& expected = b.kind == BindingKind::uniform ? next_uniform
+                              : b.kind == BindingKind::texel ? next_texel
+                                                             : next_storage;
     if (b.binding != expected)
-      throw InternalError("shader '" + name + "': " + (b.uniform ? "uniform" : "storage") + " buffer at binding " +
-                          std::to_string(b.binding) + "; storage buffers must use bindings 0..N-1 and uniform "
-                          "buffers " + std::to_string(kUniformBindingBase) + ".. without gaps");
+      throw InternalError("shader '" + name + "': " + binding_kind_name(b.kind) + " at binding " +
+                          std::to_string(b.binding) + "; storage buffers must use bindings 0..N-1, uniform "
+                          "buffers " + std::to_string(kUniformBindingBase) + ".. and texel buffers " +
+                          std::to_string(kTexelBindingBase) + ".., each without gaps");
     ++expected;
   }
   return layout;

@@ -1,6 +1,8 @@
 #include "engine/gpu/stream.hpp"
 
 #include <algorithm>
+#include <map>
+#include <tuple>
 
 #include "engine/core/error.hpp"
 #include "engine/core/log.hpp"
@@ -50,6 +52,8 @@ struct Stream::Impl {
   std::vector<VkDescriptorPool> pools;  // fallback path only
   std::uint32_t sets_in_current_pool = kSetsPerPool;
   std::vector<std::unique_ptr<RawBuffer>> scratch;
+  // Texel-buffer views of this recording, one per (buffer, offset, size); freed once it completed.
+  std::map<std::tuple<VkBuffer, std::uint64_t, std::uint64_t>, VkBufferView> views;
   std::uint32_t dispatches = 0;
   bool in_flight = false;  // submitted and not yet known complete
   bool recording = false;
@@ -91,13 +95,35 @@ struct Stream::Impl {
     pending.insert(pending.end(), accesses.begin(), accesses.end());
   }
 
+  // An RGBA32F view of [offset, offset + size) of `buffer`, made once per recording.
+  VkBufferView view_of(VkBuffer buffer, std::uint64_t offset, std::uint64_t size) {
+    const auto key = std::make_tuple(buffer, offset, size);
+    if (const auto it = views.find(key); it != views.end()) return it->second;
+    VkBufferViewCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
+    info.buffer = buffer;
+    info.format = VK_FORMAT_R32G32B32A32_SFLOAT;
+    info.offset = offset;
+    info.range = size;
+    VkBufferView view;
+    NF_VK_CHECK(vkCreateBufferView(m.device, &info, nullptr, &view));
+    views.emplace(key, view);
+    return view;
+  }
+
+  void destroy_views() {
+    for (const auto& [key, view] : views) vkDestroyBufferView(m.device, view, nullptr);
+    views.clear();
+  }
+
   VkDescriptorSet allocate_set() {
     if (sets_in_current_pool == kSetsPerPool) {
-      const VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kSetsPerPool * m.storage_slots},
-                                            {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, kSetsPerPool * std::max(1u, m.uniform_slots)}};
+      const VkDescriptorPoolSize sizes[] = {
+          {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kSetsPerPool * m.storage_slots},
+          {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, kSetsPerPool * std::max(1u, m.uniform_slots)},
+          {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, kSetsPerPool * std::max(1u, m.texel_slots)}};
       VkDescriptorPoolCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
       info.maxSets = kSetsPerPool;
-      info.poolSizeCount = 2;
+      info.poolSizeCount = 3;
       info.pPoolSizes = sizes;
       VkDescriptorPool pool;
       NF_VK_CHECK(vkCreateDescriptorPool(m.device, &info, nullptr, &pool));
@@ -142,6 +168,7 @@ Stream::~Stream() {
     for (auto& b : s.scratch) (void)b.release();
     return;
   }
+  s.destroy_views();
   if (s.recording) vkEndCommandBuffer(s.cmd);
   for (auto pool : s.pools) vkDestroyDescriptorPool(m.device, pool, nullptr);
   if (s.queries) vkDestroyQueryPool(m.device, s.queries, nullptr);
@@ -188,29 +215,46 @@ void Stream::record_dispatch(const Kernel& kernel, const BufferRange* bindings, 
 
   // Descriptors, with range checks, and the accesses they imply.
   std::vector<VkDescriptorBufferInfo> infos(count);
+  std::vector<VkBufferView> texel_views(count, VK_NULL_HANDLE);
   std::vector<Access> accesses;
   for (std::size_t b = 0; b < count; ++b) {
     const BufferRange& r = bindings[b];
+    const BindingKind kind = layout.bindings[b].kind;
     if (r.size == 0) {  // an unused optional binding: the kernel never touches it
       infos[b] = {m.dummy->handles().buffer, 0, VK_WHOLE_SIZE};
+      if (kind == BindingKind::texel) texel_views[b] = s.view_of(m.dummy->handles().buffer, 0, m.dummy->bytes());
       continue;
     }
     if (!r.buffer) throw InternalError("kernel '" + kernel.name() + "': binding " + std::to_string(b) + " is null");
     check_inside(r, "kernel '" + kernel.name() + "' binding " + std::to_string(b));
-    const bool uniform = layout.bindings[b].uniform;
-    const std::uint64_t max_range = uniform ? lim.max_uniform_buffer_range : lim.max_storage_buffer_range;
-    const std::uint64_t alignment =
-        uniform ? lim.min_uniform_buffer_offset_alignment : lim.min_storage_buffer_offset_alignment;
-    if (r.size > max_range)
-      throw DeviceError("kernel '" + kernel.name() + "': binding " + std::to_string(b) + " ('" + r.buffer->name() +
-                        "') spans " + std::to_string(r.size) + " bytes, more than the device's " +
-                        (uniform ? "maxUniformBufferRange " : "maxStorageBufferRange ") + std::to_string(max_range) +
-                        "; process it in chunks");
-    if (r.offset % alignment)
-      throw InternalError("kernel '" + kernel.name() + "': binding " + std::to_string(b) + " offset " +
-                          std::to_string(r.offset) + " is not a multiple of the device's " +
-                          (uniform ? "minUniformBufferOffsetAlignment " : "minStorageBufferOffsetAlignment ") +
-                          std::to_string(alignment));
+    const std::string what = "kernel '" + kernel.name() + "': binding " + std::to_string(b) + " ('" + r.buffer->name() + "')";
+    if (kind == BindingKind::texel) {
+      constexpr std::uint64_t kTexelBytes = 16;  // RGBA32F
+      if (r.size % kTexelBytes)
+        throw InternalError(what + " spans " + std::to_string(r.size) + " bytes, not a whole number of vec4 texels");
+      if (r.size / kTexelBytes > lim.max_texel_buffer_elements)
+        throw DeviceError(what + " spans " + std::to_string(r.size / kTexelBytes) +
+                          " texels, more than the device's maxTexelBufferElements " +
+                          std::to_string(lim.max_texel_buffer_elements) + "; process it in chunks");
+      if (lim.min_texel_buffer_offset_alignment && r.offset % lim.min_texel_buffer_offset_alignment)
+        throw InternalError(what + " offset " + std::to_string(r.offset) +
+                            " is not a multiple of the device's minTexelBufferOffsetAlignment " +
+                            std::to_string(lim.min_texel_buffer_offset_alignment));
+      texel_views[b] = s.view_of(r.buffer->handles().buffer, r.offset, r.size);
+    } else {
+      const bool uniform = kind == BindingKind::uniform;
+      const std::uint64_t max_range = uniform ? lim.max_uniform_buffer_range : lim.max_storage_buffer_range;
+      const std::uint64_t alignment =
+          uniform ? lim.min_uniform_buffer_offset_alignment : lim.min_storage_buffer_offset_alignment;
+      if (r.size > max_range)
+        throw DeviceError(what + " spans " + std::to_string(r.size) + " bytes, more than the device's " +
+                          (uniform ? "maxUniformBufferRange " : "maxStorageBufferRange ") + std::to_string(max_range) +
+                          "; process it in chunks");
+      if (r.offset % alignment)
+        throw InternalError(what + " offset " + std::to_string(r.offset) + " is not a multiple of the device's " +
+                            (uniform ? "minUniformBufferOffsetAlignment " : "minStorageBufferOffsetAlignment ") +
+                            std::to_string(alignment));
+    }
     infos[b] = {r.buffer->handles().buffer, r.offset, r.size};
     const BindingInfo& access = layout.bindings[b];
     if (access.read || access.write)
@@ -224,11 +268,17 @@ void Stream::record_dispatch(const Kernel& kernel, const BufferRange* bindings, 
   }
   std::vector<VkWriteDescriptorSet> writes(count, VkWriteDescriptorSet{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET});
   for (std::size_t b = 0; b < count; ++b) {
-    const bool uniform = layout.bindings[b].uniform;
+    const BindingKind kind = layout.bindings[b].kind;
     writes[b].dstBinding = layout.bindings[b].binding;
     writes[b].descriptorCount = 1;
-    writes[b].descriptorType = uniform ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-    writes[b].pBufferInfo = &infos[b];
+    if (kind == BindingKind::texel) {
+      writes[b].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+      writes[b].pTexelBufferView = &texel_views[b];
+    } else {
+      writes[b].descriptorType =
+          kind == BindingKind::uniform ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+      writes[b].pBufferInfo = &infos[b];
+    }
   }
   if (count > 0) {
     if (m.tuning.use_push_descriptors) {
@@ -356,6 +406,7 @@ void Stream::submit_and_wait() {
   }
   for (auto& b : s.scratch) m.release_scratch(std::move(b));
   s.scratch.clear();
+  s.destroy_views();
   s.begin_recording();
 }
 

@@ -3,6 +3,7 @@
 // paths forced (NF_NO_PUSH_DESCRIPTORS=1, NF_FORCE_STAGING=1) so CI exercises them on lavapipe.
 #include <doctest/doctest.h>
 
+#include <array>
 #include <cstdlib>
 #include <numeric>
 
@@ -95,6 +96,14 @@ TEST_CASE("kernels are reflected from their embedded SPIR-V") {
   CHECK_THROWS_WITH_AS(ctx.kernel("bench/core_copy", {{5, 1}}), doctest::Contains("specialisation constant 5"),
                        InternalError);
   CHECK_THROWS_AS(ctx.kernel("bench/core_copy", {{0, 100000}}), DeviceError);
+  // Uniform texel buffers (samplerBuffer) are read-only bindings from kTexelBindingBase on.
+  const Kernel& texel = ctx.kernel("nn/mlp_backward_weights:t1");
+  REQUIRE(texel.layout().bindings.size() == 3);
+  CHECK(texel.layout().bindings[0].kind == BindingKind::storage);
+  CHECK(texel.layout().bindings[1].kind == BindingKind::texel);
+  CHECK(texel.layout().bindings[1].binding == kTexelBindingBase);
+  CHECK(texel.layout().bindings[2].binding == kTexelBindingBase + 1);
+  CHECK_FALSE(texel.layout().bindings[2].write);
   const std::uint32_t words[] = {0x12345678u, 0, 0, 0, 0};
   CHECK_THROWS_WITH_AS(reflect_spirv(words, "garbage"), doctest::Contains("garbage"), InternalError);
 }
@@ -116,6 +125,10 @@ TEST_CASE("dispatch asserts binding count, push-constant size and binding ranges
   CHECK_THROWS_WITH_AS(s.fill(past_end, 0), doctest::Contains("lies outside"), InternalError);
   CHECK_THROWS_WITH_AS(require_bytes(a.range(0, 4), 32, "probe"), doctest::Contains("probe: range of 16 bytes"),
                        InternalError);
+  // A texel-buffer range is read as whole RGBA32F texels.
+  const Kernel& texel = ctx.kernel("nn/mlp_backward_weights:t1");
+  CHECK_THROWS_WITH_AS(s.dispatch(texel, {a, b.range(0, 3), b}, std::array<std::uint32_t, 7>{}, Elements(1)),
+                       doctest::Contains("not a whole number of vec4 texels"), InternalError);
   const std::uint64_t range = ctx.info().limits.max_storage_buffer_range;
   if (range + 64 <= ctx.info().limits.max_allocation_size) {
     RawBuffer big(ctx, range + 64, "bigger than a binding");
