@@ -86,7 +86,8 @@ json fma_record(gpu::Context& ctx, bool quick, int repeats) {
     s.submit_and_wait();
     return pass_ms(s);
   });
-  const double flops = double(invocations) * iterations * 8 * 4 * 2;  // 8 vec4 FMAs, 2 flops each lane
+  // iterations: a multiple of core_fma's unroll (32); 16 vec4 FMAs each, 2 flops per lane.
+  const double flops = double(invocations) * iterations * 16 * 4 * 2;
   json m{{"GFLOPs_wall", flops / t.median() / 1e9}};
   if (!t.gpu_ms.empty()) m["GFLOPs_gpu"] = flops / (median(t.gpu_ms) * 1e-3) / 1e9;
   return make_record(ctx, kSuite, "fma_f32", {{"invocations", invocations}, {"iterations", iterations}}, t, m);
