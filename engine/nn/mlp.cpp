@@ -1,6 +1,7 @@
 #include "engine/nn/mlp.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <numeric>
 
 #include "engine/core/error.hpp"
@@ -19,9 +20,10 @@ constexpr std::uint32_t kPreferredColumns = 32;
 // takes lavapipe's LLVM 8 s (once per machine: Mesa caches it), twice that 40 s.
 constexpr std::uint32_t kInputChunk4 = 16;
 constexpr std::uint32_t kWeightWindow4 = 4096;  // mlp_forward's uniform weight window (64 KiB)
-constexpr std::uint32_t kSlabItems = 32;  // samples per invocation in mlp_backward_weights
-constexpr std::uint32_t kSlab = kWorkgroup * kSlabItems;
-constexpr std::uint32_t kWeightBlock = 2;  // mlp_backward_weights: up to 8 x 8 gradient entries per invocation
+// mlp_backward_weights: samples per partial sum (its rows stay in cache while a slab's blocks are
+// summed), and input vec4 per block (4 x 4 kWeightBlockK accumulators per lane).
+constexpr std::uint32_t kSlab = 512;
+constexpr std::uint32_t kWeightBlockK = 2;
 constexpr std::uint32_t kMaxInferenceChunk = 1u << 16;
 
 struct ForwardPush {
@@ -37,7 +39,7 @@ struct TransposePush {
   std::uint32_t in_dim, in_stride, out_dim, out_stride, weight_offset;
 };
 struct BackwardWeightsPush {
-  std::uint32_t batch, in4, out4, out_dim, blocks_per_group;
+  std::uint32_t batch, in4, out4, out_dim, o_blocks, k_blocks, teams;
 };
 struct ReducePartialsPush {
   std::uint32_t weights, biases, slabs, weight_offset, bias_offset, accumulate;
@@ -48,7 +50,7 @@ std::uint64_t layer_parameters(const LayerShape& l) { return std::uint64_t(l.out
 }  // namespace
 
 Mlp::Mlp(gpu::Context& context, const MlpConfig& config, const std::string& name)
-    : context_(context), config_(config) {
+    : context_(context), config_(config), weight_gradient_team_(weight_gradient_team_for(context.info())) {
   config_.validate();
   layers_ = config_.layers();
   for (const LayerShape& l : layers_) {
@@ -59,6 +61,18 @@ Mlp::Mlp(gpu::Context& context, const MlpConfig& config, const std::string& name
   gradients_ = std::make_unique<gpu::Buffer<float>>(context, config_.parameter_count(), name + " gradients");
   parameters_->fill_u32(0);
   gradients_->fill_u32(0);
+}
+
+Mlp::WeightGradientTeam Mlp::weight_gradient_team_for(const gpu::DeviceInfo& device) {
+  const std::uint32_t subgroup = std::max(1u, device.limits.subgroup_size);
+  const auto& ops = device.features.subgroup_operations;
+  const auto has = [&](const char* op) { return std::find(ops.begin(), ops.end(), op) != ops.end(); };
+  WeightGradientTeam t;
+  if (!has("ballot")) return t;  // lanes on their own: no broadcast
+  t.lanes = std::min(8u, std::bit_floor(subgroup));
+  t.is_subgroup = t.lanes == subgroup ? 1u : 0u;
+  if (!t.is_subgroup && !has("shuffle")) t = {1, 1};
+  return t;
 }
 
 std::uint64_t Mlp::weight_window4() const {
@@ -104,7 +118,7 @@ void Mlp::record_product(gpu::Stream& stream, const Product& p, gpu::BufferRange
                              std::uint32_t((start - base) / 4),
                              in4,
                              k4};
-      stream.dispatch(k, {x, y, z, p.weights->range_bytes(base * 4, window * 4), p.biases}, push, gpu::Elements(batch));
+      stream.dispatch(k, {y, z, p.weights->range_bytes(base * 4, window * 4), p.biases, x}, push, gpu::Elements(batch));
     }
   }
 }
@@ -125,7 +139,8 @@ Mlp::Workspace::Workspace(const Mlp& mlp, std::uint32_t batch) : batch_(batch) {
     largest_transpose = std::max<std::uint64_t>(largest_transpose, std::uint64_t(l.in) * l.out_stride);
   }
   const std::uint64_t bytes = std::uint64_t(widest) * batch * 4;
-  if (bytes > ctx.info().limits.max_storage_buffer_range)
+  const gpu::DeviceLimits& lim = ctx.info().limits;
+  if (bytes > lim.max_storage_buffer_range || bytes / 16 > lim.max_texel_buffer_elements)
     throw InputError("mlp batch of " + std::to_string(batch) + " samples needs " + std::to_string(bytes) +
                      " bytes per layer, over the device's binding range; train with smaller batches");
   for (const LayerShape& l : mlp.layers_) {
@@ -176,15 +191,15 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
                                            l.activation.beta, l.activation.omega},
                     gpu::Elements(count));
     const gpu::BufferRange x = li == 0 ? input : ws.y_[li - 1]->whole();
-    // Narrow layers (one output vec4) would waste half of a two-vec4 block.
-    const std::uint32_t bo = l.out_stride / 4 >= kWeightBlock ? kWeightBlock : 1, bk = kWeightBlock;
-    const gpu::Kernel& weights =
-        context_.kernel("nn/mlp_backward_weights", {{0, kWorkgroup}, {1, kSlabItems}, {2, bo}, {3, bk}});
-    const std::uint32_t blocks = ((l.out_stride / 4 + bo - 1) / bo) * ((l.in_stride / 4 + 1 + bk - 1) / bk);
-    const std::uint32_t per_group = std::max(1u, (blocks + 31) / 32);
-    stream.dispatch_groups(weights, {dz, x, ws.partials_->whole()},
-                           BackwardWeightsPush{batch, l.in_stride / 4, l.out_stride / 4, l.out, per_group},
-                           gpu::Elements(slabs, (blocks + per_group - 1) / per_group));
+    const WeightGradientTeam& t = weight_gradient_team_;
+    const gpu::Kernel& weights = context_.kernel("nn/mlp_backward_weights:t" + std::to_string(t.lanes),
+                                                 {{0, kWorkgroup}, {1, kSlab}, {2, kWeightBlockK}, {3, t.is_subgroup}});
+    const std::uint32_t o_blocks = (l.out_stride / 4 + t.lanes - 1) / t.lanes;
+    const std::uint32_t k_blocks = (l.in_stride / 4 + 1 + kWeightBlockK - 1) / kWeightBlockK;
+    const std::uint32_t teams = slabs * k_blocks * o_blocks;
+    stream.dispatch(weights, {ws.partials_->whole(), dz, x},
+                    BackwardWeightsPush{batch, l.in_stride / 4, l.out_stride / 4, l.out, o_blocks, k_blocks, teams},
+                    gpu::Elements(std::uint64_t(teams) * t.lanes));
     stream.dispatch(reduce, {ws.partials_->whole(), gradients_->whole()},
                     ReducePartialsPush{l.out * l.in_stride, l.out, slabs, std::uint32_t(l.weight_offset),
                                        std::uint32_t(l.bias_offset), accumulate ? 1u : 0u},

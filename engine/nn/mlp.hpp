@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "engine/gpu/buffer.hpp"
+#include "engine/gpu/device_info.hpp"
 #include "engine/gpu/stream.hpp"
 #include "engine/nn/mlp_config.hpp"
 
@@ -75,8 +76,17 @@ class Mlp {
   // vec4 in mlp_forward's uniform weight window on this device.
   std::uint64_t weight_window4() const;
 
+  // mlp_backward_weights' team: lanes that share one sample's inputs by broadcast (a power of two
+  // up to 8), and whether the team is the whole subgroup (broadcast) or part of it (shuffle).
+  struct WeightGradientTeam {
+    std::uint32_t lanes = 1;
+    std::uint32_t is_subgroup = 1;
+  };
+  static WeightGradientTeam weight_gradient_team_for(const gpu::DeviceInfo& device);
+
   gpu::Context& context_;
   MlpConfig config_;
+  WeightGradientTeam weight_gradient_team_;
   std::vector<LayerShape> layers_;
   std::unique_ptr<gpu::Buffer<float>> parameters_, gradients_;
 };

@@ -24,14 +24,14 @@ layout(local_size_x_id = 0) in;
 #include "nf_index.glsl"
 #include "nf_activation.glsl"
 
-layout(std430, binding = 0) readonly buffer Input { vec4 x[]; };           // [batch][x_stride4]
-layout(std430, binding = 1) buffer Output { vec4 y[]; };                   // [batch][out4]
-layout(std430, binding = 2) writeonly buffer PreActivation { vec4 z[]; };  // Sine layers in training
+layout(std430, binding = 0) buffer Output { vec4 y[]; };                   // [batch][out4]
+layout(std430, binding = 1) writeonly buffer PreActivation { vec4 z[]; };  // Sine layers in training
 // This dispatch's rows, stride4 vec4 apart, from vec4 w_base on: the binding starts at an offset
 // the device accepts and w_base covers the rest; it spans up to 64 KiB (less where the device's
 // uniform range or the buffer ends sooner).
 layout(std140, binding = 12) uniform Weights { vec4 w[4096]; };
 layout(std140, binding = 13) uniform Biases { vec4 b4[256]; };             // the layer's biases
+layout(binding = 16) uniform samplerBuffer x;                              // [batch][x_stride4]
 
 layout(push_constant) uniform Push {
   uint batch;
@@ -61,7 +61,7 @@ void main() {
     acc[c] = pc.has_bias != 0u ? bias : 0.0;
   }
   [[unroll]] for (uint k4 = 0u; k4 < IN4; ++k4) {
-    const vec4 xv = x[s * pc.stride4 + pc.x_first4 + k4];
+    const vec4 xv = texelFetch(x, int(s * pc.stride4 + pc.x_first4 + k4));
     [[unroll]] for (uint c = 0u; c < COLS; ++c) {
       const vec4 wv = w[pc.w_base + min(c, pc.rows - 1u) * pc.stride4 + k4];
       acc[c] = fma(xv.x, wv.x, fma(xv.y, wv.y, fma(xv.z, wv.z, fma(xv.w, wv.w, acc[c]))));

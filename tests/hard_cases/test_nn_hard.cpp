@@ -1,5 +1,6 @@
 // Hard cases of the nn kernels: precision of the frequency encoding far from the origin, zero-size
-// batches, batches that are not a multiple of the workgroup, Softplus at huge beta*x.
+// batches, batches that are not a multiple of the workgroup, parameter gradients summed over
+// several slabs with odd widths, Softplus at huge beta*x.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -68,6 +69,61 @@ TEST_CASE("an MLP handles empty batches and batches of any size") {
     REQUIRE(got.size() == ref.size());
     for (std::size_t i = 0; i < got.size(); ++i) CHECK(got[i] == doctest::Approx(ref[i]).epsilon(1e-5));
   }
+}
+
+// The weight gradient sums per slab of samples, then over slabs; its blocks span teams of lanes
+// that share inputs by broadcast (by shuffle where the subgroup is wider: the lanes4 and lanes16
+// entries). Widths that are not multiples of a block and a batch with a short last slab and a
+// short last team check every edge against the double-precision reference.
+TEST_CASE("MLP gradients over several slabs and odd widths match the reference") {
+  auto& ctx = test::context();
+  MlpConfig c;
+  c.input_dim = 37;
+  c.hidden = {70, 36};
+  c.output_dim = 5;
+  c.hidden_activation = {Activation::Softplus, 2.f, 30.f};
+  Mlp mlp(ctx, c);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-0.5, 0.5);
+  std::vector<double> params(c.parameter_count(), 0.0);
+  for (const LayerShape& l : c.layers())
+    for (std::uint32_t o = 0; o < l.out; ++o) {
+      for (std::uint32_t k = 0; k < l.in; ++k) params[l.weight_offset + o * l.in_stride + k] = u(rng);
+      params[l.bias_offset + o] = u(rng);
+    }
+  const std::uint32_t batch = 1300;
+  std::vector<double> in(std::size_t(mlp.input_stride()) * batch, 0.0);
+  std::vector<double> grad_out(std::size_t(mlp.output_stride()) * batch, 0.0);
+  for (std::uint32_t s = 0; s < batch; ++s) {
+    for (std::uint32_t k = 0; k < c.input_dim; ++k) in[s * mlp.input_stride() + k] = u(rng);
+    for (std::uint32_t o = 0; o < c.output_dim; ++o) grad_out[s * mlp.output_stride() + o] = u(rng);
+  }
+  const auto to_float = [](const std::vector<double>& v) { return std::vector<float>(v.begin(), v.end()); };
+  mlp.parameters().upload(to_float(params));
+  gpu::Buffer<float> input(ctx, std::span<const float>(to_float(in)), "input");
+  gpu::Buffer<float> grad_output(ctx, std::span<const float>(to_float(grad_out)), "grad out");
+  gpu::Buffer<float> grad_input(ctx, std::uint64_t(mlp.input_stride()) * batch, "grad in");
+  Mlp::Workspace ws(mlp, batch);
+  gpu::Stream s(ctx);
+  mlp.forward(s, ws, input);
+  mlp.backward(s, ws, input, grad_output, grad_input, false);
+  s.submit_and_wait();
+
+  const auto trace = mlp_forward_ref<double>(c, params, in, batch);
+  std::vector<double> want_params(params.size(), 0.0);
+  const auto want_input = mlp_backward_ref<double>(c, params, in, batch, trace, grad_out, want_params);
+  const auto check = [](const std::vector<float>& got, const std::vector<double>& want, const char* what) {
+    REQUIRE(got.size() == want.size());
+    double scale = 0.0;
+    for (double w : want) scale = std::max(scale, std::abs(w));
+    std::size_t bad = 0;
+    for (std::size_t i = 0; i < got.size(); ++i)
+      if (std::abs(got[i] - want[i]) > 1e-4 * scale + 1e-5 * std::abs(want[i])) ++bad;
+    INFO(what << ": largest |value| " << scale);
+    CHECK(bad == 0);
+  };
+  check(mlp.gradients().download(), want_params, "parameter gradients");
+  check(grad_input.download(), want_input, "input gradients");
 }
 
 TEST_CASE("Softplus at huge beta*x stays finite, forward and backward") {
