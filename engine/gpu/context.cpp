@@ -419,4 +419,13 @@ void Context::Impl::note_allocation(std::int64_t delta) {
   }
 }
 
+bool use_gpu_layout(const Context& context, const char* env) {
+  if (const char* v = std::getenv(env); v && *v) {
+    if (std::strcmp(v, "0") != 0 && std::strcmp(v, "1") != 0)
+      throw InputError(std::string(env) + " is '" + v + "'; use 0 or 1");
+    if (std::strcmp(v, "1") == 0) return true;
+  }
+  return !context.info().is_cpu();
+}
+
 }  // namespace nf::gpu

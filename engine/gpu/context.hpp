@@ -65,4 +65,9 @@ class Context {
   std::unique_ptr<Impl> impl_;
 };
 
+// Whether kernels with a CPU and a GPU layout take the GPU one: on GPUs, or anywhere when the
+// environment variable `env` is 1 (so that CI runs the GPU layout on lavapipe). Throws InputError
+// naming the variable for a value other than 0 or 1.
+bool use_gpu_layout(const Context& context, const char* env);
+
 }  // namespace nf::gpu

@@ -1,8 +1,8 @@
 #include "engine/nn/mlp.hpp"
 
 #include <algorithm>
-#include <bit>
 #include <numeric>
+#include <span>
 
 #include "engine/core/error.hpp"
 #include "engine/gpu/chunking.hpp"
@@ -13,9 +13,17 @@ namespace nf::nn {
 namespace {
 
 constexpr std::uint32_t kWorkgroup = 64;
-// Output rows per invocation in mlp_forward: 32 accumulators fill the vector registers of an
-// AVX-512 host (lavapipe) and halve the per-lane input loads per multiply-add against 16.
-constexpr std::uint32_t kPreferredColumns = 32;
+// mlp_forward's blocks, preferred first: rows x samples per invocation. 32 accumulators fill the
+// vector registers of an AVX-512 host. On CPU devices (lavapipe) a uniform load costs a bounds
+// check and a branch, so each weight feeds two samples (8 x 4 or 16 x 2 spill; 8 x 2 measured 10 %
+// faster than 32 x 1 on the strand decoder); GPUs broadcast weights for free and want one sample
+// per invocation. Narrower blocks serve devices with a small uniform range.
+// NF_MLP_GPU_BLOCKS=1 takes the GPU blocks on any device, so that CI runs them.
+struct ForwardBlock {
+  std::uint32_t cols, samples;
+};
+constexpr ForwardBlock kCpuBlocks[] = {{8, 2}};
+constexpr ForwardBlock kGpuBlocks[] = {{32, 1}, {16, 1}, {8, 2}};
 // Input vec4 per mlp_forward dispatch: its body is unrolled, and compiling 16 x 32 vec4 already
 // takes lavapipe's LLVM 8 s (once per machine: Mesa caches it), twice that 40 s.
 constexpr std::uint32_t kInputChunk4 = 16;
@@ -27,19 +35,19 @@ constexpr std::uint32_t kWeightBlockK = 2;
 constexpr std::uint32_t kMaxInferenceChunk = 1u << 16;
 
 struct ForwardPush {
-  std::uint32_t batch, out4, out_dim, row_first, rows, activation;
+  std::uint32_t batch, out4, out_dim, row_first, rows;
   float beta, omega;
-  std::uint32_t store_z, has_bias, accumulate, w_base, stride4, x_first4;
+  std::uint32_t has_bias, accumulate, w_base, stride4, x_first4;
 };
 struct ActivationBackwardPush {
-  std::uint32_t count, out_dim, out_stride, activation;
+  std::uint32_t count4, out_dim, out4;
   float beta, omega;
 };
 struct TransposePush {
   std::uint32_t in_dim, in_stride, out_dim, out_stride, weight_offset;
 };
 struct BackwardWeightsPush {
-  std::uint32_t batch, in4, out4, out_dim, o_blocks, k_blocks, teams;
+  std::uint32_t batch, in4, out4, out_dim, k_blocks, blocks;
 };
 struct ReducePartialsPush {
   std::uint32_t weights, biases, slabs, weight_offset, bias_offset, accumulate;
@@ -50,12 +58,12 @@ std::uint64_t layer_parameters(const LayerShape& l) { return std::uint64_t(l.out
 }  // namespace
 
 Mlp::Mlp(gpu::Context& context, const MlpConfig& config, const std::string& name)
-    : context_(context), config_(config), weight_gradient_team_(weight_gradient_team_for(context.info())) {
+    : context_(context), config_(config) {
   config_.validate();
   layers_ = config_.layers();
   for (const LayerShape& l : layers_) {
-    columns_for(l.in_stride);  // throws if the device's uniform buffers cannot hold a row block
-    columns_for(l.out_stride);
+    block_for(l.in_stride);  // throws if the device's uniform buffers cannot hold a row block
+    block_for(l.out_stride);
   }
   parameters_ = std::make_unique<gpu::Buffer<float>>(context, config_.parameter_count(), name + " parameters");
   gradients_ = std::make_unique<gpu::Buffer<float>>(context, config_.parameter_count(), name + " gradients");
@@ -63,43 +71,41 @@ Mlp::Mlp(gpu::Context& context, const MlpConfig& config, const std::string& name
   gradients_->fill_u32(0);
 }
 
-Mlp::WeightGradientTeam Mlp::weight_gradient_team_for(const gpu::DeviceInfo& device) {
-  const std::uint32_t subgroup = std::max(1u, device.limits.subgroup_size);
-  const auto& ops = device.features.subgroup_operations;
-  const auto has = [&](const char* op) { return std::find(ops.begin(), ops.end(), op) != ops.end(); };
-  WeightGradientTeam t;
-  if (!has("ballot")) return t;  // lanes on their own: no broadcast
-  t.lanes = std::min(8u, std::bit_floor(subgroup));
-  t.is_subgroup = t.lanes == subgroup ? 1u : 0u;
-  if (!t.is_subgroup && !has("shuffle")) t = {1, 1};
-  return t;
-}
-
 std::uint64_t Mlp::weight_window4() const {
   return std::min<std::uint64_t>(kWeightWindow4, context_.info().limits.max_uniform_buffer_range / 16);
 }
 
-std::uint32_t Mlp::columns_for(std::uint32_t in_stride) const {
+Mlp::Block Mlp::block_for(std::uint32_t in_stride) const {
   // mlp_forward's weight window: COLS rows of in_stride floats plus 16 vec4 of alignment slack.
   const std::uint64_t capacity = weight_window4();
-  for (std::uint32_t cols : {kPreferredColumns, 16u, 8u})
-    if (std::uint64_t(cols) * (in_stride / 4) + 16 <= capacity) return cols;
+  const std::span<const ForwardBlock> blocks =
+      gpu::use_gpu_layout(context_, "NF_MLP_GPU_BLOCKS") ? std::span<const ForwardBlock>(kGpuBlocks)
+                                                         : std::span<const ForwardBlock>(kCpuBlocks);
+  for (const ForwardBlock& b : blocks)
+    if (std::uint64_t(b.cols) * (in_stride / 4) + 16 <= capacity) return {b.cols, b.samples};
   throw DeviceError("mlp: a layer with " + std::to_string(in_stride) + " inputs needs more uniform-buffer range than "
                     "the device's " + std::to_string(context_.info().limits.max_uniform_buffer_range) + " bytes");
 }
 
 void Mlp::record_product(gpu::Stream& stream, const Product& p, gpu::BufferRange x, gpu::BufferRange y,
                          gpu::BufferRange z, std::uint32_t batch) const {
-  const std::uint32_t cols = columns_for(p.in_stride), in4 = p.in_stride / 4;
+  const Block block = block_for(p.in_stride);
+  const std::uint32_t cols = block.cols, in4 = p.in_stride / 4;
+  const std::string variant = "nn/mlp_forward:c" + std::to_string(cols) + "s" + std::to_string(block.samples);
   const std::uint64_t align = std::max<std::uint64_t>(4, context_.info().limits.min_uniform_buffer_offset_alignment / 4);
   const std::uint64_t buffer_floats = p.weights->bytes() / 4;
+  const std::uint64_t invocations = (std::uint64_t(batch) + block.samples - 1) / block.samples;
   for (std::uint32_t first = 0; first < p.out_dim; first += cols) {
     const std::uint32_t rows = std::min(cols, p.out_dim - first);
     for (std::uint32_t k4 = 0; k4 < in4; k4 += kInputChunk4) {
       const std::uint32_t chunk4 = std::min(kInputChunk4, in4 - k4);
       const bool first_chunk = k4 == 0, last_chunk = k4 + chunk4 == in4;
-      const gpu::Kernel& k =
-          context_.kernel("nn/mlp_forward:c" + std::to_string(cols), {{0, kWorkgroup}, {3, chunk4}});
+      const bool store_z = last_chunk && z.size;
+      const gpu::Kernel& k = context_.kernel(
+          variant, {{0, kWorkgroup},
+                    {3, chunk4},
+                    {4, std::uint32_t(last_chunk ? p.activation.type : Activation::None)},
+                    {5, store_z ? 1u : 0u}});
       // Bind from an aligned offset at or before the block; the shader skips the difference.
       const std::uint64_t start = p.weight_offset + std::uint64_t(first) * p.in_stride + 4u * k4;
       const std::uint64_t base = start / align * align;
@@ -109,16 +115,15 @@ void Mlp::record_product(gpu::Stream& stream, const Product& p, gpu::BufferRange
                              p.out_dim,
                              first,
                              rows,
-                             std::uint32_t(last_chunk ? p.activation.type : Activation::None),
                              p.activation.beta,
                              p.activation.omega,
-                             last_chunk && z.size ? 1u : 0u,
                              first_chunk && p.biases.size ? 1u : 0u,
                              first_chunk ? 0u : 1u,
                              std::uint32_t((start - base) / 4),
                              in4,
                              k4};
-      stream.dispatch(k, {y, z, p.weights->range_bytes(base * 4, window * 4), p.biases, x}, push, gpu::Elements(batch));
+      stream.dispatch(k, {y, store_z ? z : gpu::BufferRange{}, p.weights->range_bytes(base * 4, window * 4), p.biases, x},
+                      push, gpu::Elements(invocations));
     }
   }
 }
@@ -175,7 +180,6 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
   gpu::require_bytes(input, std::uint64_t(batch) * input_stride() * 4, "mlp backward input");
   gpu::require_bytes(grad_output, std::uint64_t(batch) * output_stride() * 4, "mlp output gradient");
   if (grad_input.size) gpu::require_bytes(grad_input, std::uint64_t(batch) * input_stride() * 4, "mlp input gradient");
-  const gpu::Kernel& act = context_.kernel("nn/mlp_activation_backward", {{0, 256}});
   const gpu::Kernel& transpose = context_.kernel("nn/mlp_transpose", {{0, 256}});
   const gpu::Kernel& reduce = context_.kernel("nn/mlp_reduce_partials", {{0, 256}});
   const std::uint32_t slabs = (batch + kSlab - 1) / kSlab;
@@ -186,20 +190,20 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
     const std::uint64_t count = std::uint64_t(l.out_stride) * batch;
     const gpu::BufferRange dz = buffers[li % 2]->range(0, count);
     const gpu::BufferRange z = ws.z_[li] ? ws.z_[li]->whole() : gpu::BufferRange{};
-    stream.dispatch(act, {grad_y, ws.y_[li]->whole(), z, dz},
-                    ActivationBackwardPush{std::uint32_t(count), l.out, l.out_stride, std::uint32_t(l.activation.type),
-                                           l.activation.beta, l.activation.omega},
-                    gpu::Elements(count));
+    const gpu::Kernel& act =
+        context_.kernel("nn/mlp_activation_backward", {{0, 256}, {1, std::uint32_t(l.activation.type)}});
+    stream.dispatch(act, {dz, grad_y, ws.y_[li]->whole(), z},
+                    ActivationBackwardPush{std::uint32_t(count / 4), l.out, l.out_stride / 4, l.activation.beta,
+                                           l.activation.omega},
+                    gpu::Elements(count / 4));
     const gpu::BufferRange x = li == 0 ? input : ws.y_[li - 1]->whole();
-    const WeightGradientTeam& t = weight_gradient_team_;
-    const gpu::Kernel& weights = context_.kernel("nn/mlp_backward_weights:t" + std::to_string(t.lanes),
-                                                 {{0, kWorkgroup}, {1, kSlab}, {2, kWeightBlockK}, {3, t.is_subgroup}});
-    const std::uint32_t o_blocks = (l.out_stride / 4 + t.lanes - 1) / t.lanes;
+    const gpu::Kernel& weights =
+        context_.kernel("nn/mlp_backward_weights", {{0, kWorkgroup}, {1, kSlab}, {2, kWeightBlockK}});
     const std::uint32_t k_blocks = (l.in_stride / 4 + 1 + kWeightBlockK - 1) / kWeightBlockK;
-    const std::uint32_t teams = slabs * k_blocks * o_blocks;
+    const std::uint32_t blocks = slabs * k_blocks * (l.out_stride / 4);
     stream.dispatch(weights, {ws.partials_->whole(), dz, x},
-                    BackwardWeightsPush{batch, l.in_stride / 4, l.out_stride / 4, l.out, o_blocks, k_blocks, teams},
-                    gpu::Elements(std::uint64_t(teams) * t.lanes));
+                    BackwardWeightsPush{batch, l.in_stride / 4, l.out_stride / 4, l.out, k_blocks, blocks},
+                    gpu::Elements(blocks));
     stream.dispatch(reduce, {ws.partials_->whole(), gradients_->whole()},
                     ReducePartialsPush{l.out * l.in_stride, l.out, slabs, std::uint32_t(l.weight_offset),
                                        std::uint32_t(l.bias_offset), accumulate ? 1u : 0u},

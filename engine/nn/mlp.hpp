@@ -8,7 +8,6 @@
 #include <vector>
 
 #include "engine/gpu/buffer.hpp"
-#include "engine/gpu/device_info.hpp"
 #include "engine/gpu/stream.hpp"
 #include "engine/nn/mlp_config.hpp"
 
@@ -71,22 +70,18 @@ class Mlp {
                       gpu::BufferRange z, std::uint32_t batch) const;
   void record_layer_forward(gpu::Stream& stream, const LayerShape& layer, gpu::BufferRange x, gpu::BufferRange y,
                             gpu::BufferRange z, std::uint32_t batch) const;
-  // Output rows per invocation for inputs of this stride that fit the device's uniform buffers.
-  std::uint32_t columns_for(std::uint32_t in_stride) const;
+  // mlp_forward's block (output rows x samples per invocation) for inputs of this stride: the
+  // device kind's preferred one that fits its uniform buffers.
+  struct Block {
+    std::uint32_t cols, samples;
+  };
+  Block block_for(std::uint32_t in_stride) const;
   // vec4 in mlp_forward's uniform weight window on this device.
   std::uint64_t weight_window4() const;
 
-  // mlp_backward_weights' team: lanes that share one sample's inputs by broadcast (a power of two
-  // up to 8), and whether the team is the whole subgroup (broadcast) or part of it (shuffle).
-  struct WeightGradientTeam {
-    std::uint32_t lanes = 1;
-    std::uint32_t is_subgroup = 1;
-  };
-  static WeightGradientTeam weight_gradient_team_for(const gpu::DeviceInfo& device);
 
   gpu::Context& context_;
   MlpConfig config_;
-  WeightGradientTeam weight_gradient_team_;
   std::vector<LayerShape> layers_;
   std::unique_ptr<gpu::Buffer<float>> parameters_, gradients_;
 };

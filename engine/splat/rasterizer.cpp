@@ -99,14 +99,7 @@ namespace {
 // instead of 8; subgroup sums straight to global atomics, since shared atomics there are per-lane
 // loops and barriers switch coroutines). On lavapipe the CPU layout is 2x faster forward and 2.5x
 // backward. NF_SPLAT_GPU_LAYOUT=1 takes the GPU layout on any device, so that CI runs it.
-bool choose_gpu_layout(const gpu::Context& ctx) {
-  if (const char* env = std::getenv("NF_SPLAT_GPU_LAYOUT"); env && *env) {
-    const std::string v = env;
-    if (v != "0" && v != "1") throw InputError("NF_SPLAT_GPU_LAYOUT is '" + v + "'; use 0 or 1");
-    if (v == "1") return true;
-  }
-  return !ctx.info().is_cpu();
-}
+bool choose_gpu_layout(const gpu::Context& ctx) { return gpu::use_gpu_layout(ctx, "NF_SPLAT_GPU_LAYOUT"); }
 
 std::uint32_t pixels_per_invocation(bool gpu_layout) { return gpu_layout ? 1 : 4; }
 

@@ -1,36 +1,45 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// dL/dz = dL/dy * act'(z) for one layer, elementwise over [batch][out_stride]; padding columns get
-// zero. grad_y and grad_z may be the same range.
+#extension GL_EXT_control_flow_attributes : require
+// dL/dz = dL/dy * act'(z) for one layer, elementwise over [batch][out_stride], four values per
+// invocation; padding columns get zero. grad_y and grad_z may be the same range (each value is
+// read before its invocation writes it). Reads are texel fetches (straight-line gathers on
+// lavapipe, where storage-buffer loads loop over the lanes) and the activation is a
+// specialisation constant (lavapipe evaluates both sides of a branch).
 
 layout(constant_id = 0) const uint WG = 256;
+layout(constant_id = 1) const uint ACTIVATION = 0;  // NF_ACT_*
 layout(local_size_x_id = 0) in;
 #include "nf_index.glsl"
 #include "nf_activation.glsl"
 
-layout(std430, binding = 0) readonly buffer GradY { float grad_y[]; };
-layout(std430, binding = 1) readonly buffer Y { float y[]; };
-layout(std430, binding = 2) readonly buffer Z { float z[]; };  // read for Sine only
-layout(std430, binding = 3) writeonly buffer GradZ { float grad_z[]; };
+layout(std430, binding = 0) writeonly buffer GradZ { vec4 grad_z[]; };
+layout(binding = 16) uniform samplerBuffer grad_y;
+layout(binding = 17) uniform samplerBuffer y;  // the layer's output (ReLU, Softplus)
+layout(binding = 18) uniform samplerBuffer z;  // its pre-activation (Sine)
 
 layout(push_constant) uniform Push {
-  uint count;  // batch * out_stride
+  uint count4;  // batch * out_stride / 4
   uint out_dim;
-  uint out_stride;
-  uint activation;
+  uint out4;    // out_stride / 4
   float beta;
   float omega;
 } pc;
 
 void main() {
   const uint i = nf_linear_index();
-  if (i >= pc.count) return;
-  if (i % pc.out_stride >= pc.out_dim) {
-    grad_z[i] = 0.0;
-    return;
+  if (i >= pc.count4) return;
+  const uint column = (i % pc.out4) * 4u;
+  const vec4 g = texelFetch(grad_y, int(i));
+  vec4 d = vec4(1.0);
+  if (ACTIVATION == NF_ACT_SINE) {
+    const vec4 zv = texelFetch(z, int(i));
+    [[unroll]] for (uint e = 0u; e < 4u; ++e) d[e] = nf_activate_derivative(ACTIVATION, pc.beta, pc.omega, 0.0, zv[e]);
+  } else if (ACTIVATION != NF_ACT_NONE) {
+    const vec4 yv = texelFetch(y, int(i));
+    [[unroll]] for (uint e = 0u; e < 4u; ++e) d[e] = nf_activate_derivative(ACTIVATION, pc.beta, pc.omega, yv[e], 0.0);
   }
-  float d = 1.0;
-  if (pc.activation == NF_ACT_SINE) d = nf_activate_derivative(pc.activation, pc.beta, pc.omega, 0.0, z[i]);
-  else if (pc.activation != NF_ACT_NONE) d = nf_activate_derivative(pc.activation, pc.beta, pc.omega, y[i], 0.0);
-  grad_z[i] = grad_y[i] * d;
+  vec4 out_grad;
+  [[unroll]] for (uint e = 0u; e < 4u; ++e) out_grad[e] = column + e < pc.out_dim ? g[e] * d[e] : 0.0;
+  grad_z[i] = out_grad;
 }

@@ -1,37 +1,43 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
-// One MLP layer for a block of COLS output rows: y = act(W x + b). One sample per invocation, read
-// four features at a time; COLS outputs stay in registers. Weights and biases sit in uniform
-// buffers that every lane reads at the same offset. The body is straight-line code on purpose:
-// lavapipe (Mesa 22.3) loads a value once and broadcasts it only when its offset is built from
-// constants and push constants *and* the load sits outside any loop, branch or early return;
-// anywhere else every lane loads on its own (a gather per weight, 8 loads per FMA). So the input
-// loop is unrolled (IN4 is a specialisation constant), the tail lanes are clamped instead of
-// returning, and only the stores are conditional. LLVM's compile time grows faster than the body
-// (8 s for 16 x 32 vec4, 40 s for twice that), so a dispatch covers a chunk of at most 16 input vec4
-// and later chunks add to y; the bias enters with the first chunk, the activation with the last.
-// GPUs broadcast uniform loads anyway.
+// One MLP layer for a block of COLS output rows: y = act(W x + b), for SAMPLES samples per
+// invocation, reading four features at a time; COLS x SAMPLES outputs stay in registers. Weights
+// and biases sit in uniform buffers that every lane reads at the same offset. The body is
+// straight-line code on purpose: lavapipe (Mesa 22.3) loads a value once and broadcasts it only
+// when its offset is built from constants and push constants *and* the load sits outside any loop,
+// branch or early return; anywhere else every lane loads on its own. Even then each weight load
+// costs a bounds check and a branch, so on CPU devices every weight feeds two samples (c8s2: more
+// accumulators would spill); GPUs broadcast uniform loads anyway and take one sample per
+// invocation (c32s1). Inputs come by texel fetch, a straight-line gather, where a storage-buffer
+// load loops over the lanes. The input loop is unrolled (IN4 is a specialisation constant), the
+// tail lanes are clamped instead of returning, and only the stores are conditional. LLVM's compile
+// time grows faster than the body (8 s for 2048 multiply-adds, 40 s for twice that), so a dispatch
+// covers a chunk of at most 16 input vec4 and later chunks add to y; the bias enters with the
+// first chunk, the activation with the last (a specialisation constant: lavapipe evaluates both
+// sides of a branch, so a run-time switch would evaluate every activation).
 // The same kernel computes the input adjoint dx = W^T dz, on transposed weights. One dispatch per
 // block of COLS rows and input chunk. Layout: engine/nn/mlp_config.hpp. Host: engine/nn/mlp.cpp.
-//! variant c8 -DCOLS=8
-//! variant c16 -DCOLS=16
-//! variant c32 -DCOLS=32
+//! variant c8s2 -DCOLS=8 -DSAMPLES=2
+//! variant c16s1 -DCOLS=16 -DSAMPLES=1
+//! variant c32s1 -DCOLS=32 -DSAMPLES=1
 
 layout(constant_id = 0) const uint WG = 64;
-layout(constant_id = 3) const uint IN4 = 1;  // input vec4 in this dispatch's chunk
+layout(constant_id = 3) const uint IN4 = 1;         // input vec4 in this dispatch's chunk
+layout(constant_id = 4) const uint ACTIVATION = 0;  // NF_ACT_*: NONE but on a layer's last chunk
+layout(constant_id = 5) const bool STORE_Z = false;  // keep pre-activations (Sine layers in training)
 layout(local_size_x_id = 0) in;
 #include "nf_index.glsl"
 #include "nf_activation.glsl"
 
 layout(std430, binding = 0) buffer Output { vec4 y[]; };                   // [batch][out4]
-layout(std430, binding = 1) writeonly buffer PreActivation { vec4 z[]; };  // Sine layers in training
+layout(std430, binding = 1) writeonly buffer PreActivation { vec4 z[]; };  // when STORE_Z
 // This dispatch's rows, stride4 vec4 apart, from vec4 w_base on: the binding starts at an offset
 // the device accepts and w_base covers the rest; it spans up to 64 KiB (less where the device's
 // uniform range or the buffer ends sooner).
 layout(std140, binding = 12) uniform Weights { vec4 w[4096]; };
-layout(std140, binding = 13) uniform Biases { vec4 b4[256]; };             // the layer's biases
-layout(binding = 16) uniform samplerBuffer x;                              // [batch][x_stride4]
+layout(std140, binding = 13) uniform Biases { vec4 b4[256]; };  // the layer's biases
+layout(binding = 16) uniform samplerBuffer x;                   // [batch][x_stride4]
 
 layout(push_constant) uniform Push {
   uint batch;
@@ -39,48 +45,54 @@ layout(push_constant) uniform Push {
   uint out_dim;
   uint row_first;  // first output row of this dispatch (a multiple of 4)
   uint rows;       // rows in this dispatch (<= COLS)
-  uint activation;
   float beta;
   float omega;
-  uint store_z;
   uint has_bias;
-  uint accumulate;  // add to y instead of overwriting
+  uint accumulate;  // add the earlier chunks' sums
   uint w_base;      // first vec4 of this dispatch's block in the weights binding
   uint stride4;     // vec4 per input row: between rows of x and between weight rows
   uint x_first4;    // first input vec4 of this chunk
 } pc;
 
 void main() {
-  const uint index = nf_linear_index();
-  const uint s = min(index, pc.batch - 1u);
-  float acc[COLS];
+  const uint first_sample = nf_linear_index() * SAMPLES;
+  uint s[SAMPLES];  // this invocation's samples, clamped into the batch for reading
+  [[unroll]] for (uint t = 0u; t < SAMPLES; ++t) s[t] = min(first_sample + t, pc.batch - 1u);
+
+  float acc[SAMPLES][COLS];
   [[unroll]] for (uint c = 0u; c < COLS; ++c) {
     // Without biases the binding is a small placeholder: read its first entry (and discard it).
     const uint o = pc.has_bias != 0u ? min(pc.row_first + c, pc.out_dim - 1u) : 0u;
-    const float bias = b4[o >> 2][o & 3u];
-    acc[c] = pc.has_bias != 0u ? bias : 0.0;
+    const float bias = pc.has_bias != 0u ? b4[o >> 2][o & 3u] : 0.0;
+    [[unroll]] for (uint t = 0u; t < SAMPLES; ++t) acc[t][c] = bias;
   }
   [[unroll]] for (uint k4 = 0u; k4 < IN4; ++k4) {
-    const vec4 xv = texelFetch(x, int(s * pc.stride4 + pc.x_first4 + k4));
+    vec4 xv[SAMPLES];
+    [[unroll]] for (uint t = 0u; t < SAMPLES; ++t) xv[t] = texelFetch(x, int(s[t] * pc.stride4 + pc.x_first4 + k4));
     [[unroll]] for (uint c = 0u; c < COLS; ++c) {
       const vec4 wv = w[pc.w_base + min(c, pc.rows - 1u) * pc.stride4 + k4];
-      acc[c] = fma(xv.x, wv.x, fma(xv.y, wv.y, fma(xv.z, wv.z, fma(xv.w, wv.w, acc[c]))));
+      [[unroll]] for (uint t = 0u; t < SAMPLES; ++t)
+        acc[t][c] = fma(xv[t].x, wv.x, fma(xv[t].y, wv.y, fma(xv[t].z, wv.z, fma(xv[t].w, wv.w, acc[t][c]))));
     }
   }
-  if (index >= pc.batch) return;
-  for (uint j = 0u; j < COLS / 4u; ++j) {
-    if (4u * j >= pc.rows) break;
-    const uint o = pc.row_first + 4u * j;
-    vec4 pre = vec4(acc[4u * j], acc[4u * j + 1u], acc[4u * j + 2u], acc[4u * j + 3u]);
-    const uint i = s * pc.out4 + (o >> 2);
-    if (pc.accumulate != 0u) pre += y[i];
-    vec4 post;
-    for (uint e = 0u; e < 4u; ++e) {
-      const bool real = o + e < pc.out_dim;  // padding columns stay zero
-      pre[e] = real ? pre[e] : 0.0;
-      post[e] = real ? nf_activate(pc.activation, pc.beta, pc.omega, pre[e]) : 0.0;
+  [[unroll]] for (uint t = 0u; t < SAMPLES; ++t) {
+    [[unroll]] for (uint j = 0u; j < COLS / 4u; ++j) {
+      const uint o = pc.row_first + 4u * j;
+      const uint i = s[t] * pc.out4 + min(o, 4u * pc.out4 - 4u) / 4u;
+      vec4 pre = vec4(acc[t][4u * j], acc[t][4u * j + 1u], acc[t][4u * j + 2u], acc[t][4u * j + 3u]);
+      if (4u * j < pc.rows && first_sample + t < pc.batch) {
+        // The earlier chunks' sums, by storage load: it skips inactive lanes, where a texel fetch
+        // would read memory for every lane of every chunk.
+        if (pc.accumulate != 0u) pre += y[i];
+        vec4 post;
+        [[unroll]] for (uint e = 0u; e < 4u; ++e) {
+          const bool real = o + e < pc.out_dim;  // padding columns stay zero
+          pre[e] = real ? pre[e] : 0.0;
+          post[e] = real ? nf_activate(ACTIVATION, pc.beta, pc.omega, pre[e]) : 0.0;
+        }
+        y[i] = post;
+        if (STORE_Z) z[i] = pre;
+      }
     }
-    y[i] = post;
-    if (pc.store_z != 0u) z[i] = pre;
   }
 }
