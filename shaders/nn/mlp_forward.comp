@@ -81,8 +81,8 @@ void main() {
       const uint i = s[t] * pc.out4 + min(o, 4u * pc.out4 - 4u) / 4u;
       vec4 pre = vec4(acc[t][4u * j], acc[t][4u * j + 1u], acc[t][4u * j + 2u], acc[t][4u * j + 3u]);
       if (4u * j < pc.rows && first_sample + t < pc.batch) {
-        // The earlier chunks' sums, by storage load: it skips inactive lanes, where a texel fetch
-        // would read memory for every lane of every chunk.
+        // The earlier chunks' sums, by storage load under the branch: the first chunk skips it
+        // entirely, where a texel fetch would read for every chunk (the two measured the same).
         if (pc.accumulate != 0u) pre += y[i];
         vec4 post;
         [[unroll]] for (uint e = 0u; e < 4u; ++e) {
