@@ -33,21 +33,26 @@ constexpr std::uint32_t kWeightWindow4 = 4096;  // mlp_forward's uniform weight 
 constexpr std::uint32_t kSlab = 512;
 constexpr std::uint32_t kWeightBlockK = 2;
 constexpr std::uint32_t kMaxInferenceChunk = 1u << 16;
+// Hidden activations and gradients are lane-interleaved in groups of this many samples
+// (shaders/include/nf_rows.glsl); tensors crossing the module's boundary stay sample-major.
+constexpr std::uint32_t kRowGroup = 8;
+std::uint64_t interleaved_rows(std::uint64_t batch) { return (batch + kRowGroup - 1) / kRowGroup * kRowGroup; }
 
 struct ForwardPush {
   std::uint32_t batch, out4, out_dim, row_first, rows;
   float beta, omega;
-  std::uint32_t has_bias, accumulate, w_base, stride4, x_first4;
+  std::uint32_t has_bias, accumulate, w_base, stride4, x_first4, x_interleaved, y_interleaved;
 };
 struct ActivationBackwardPush {
-  std::uint32_t count4, out_dim, out4;
+  std::uint32_t count4, batch, out_dim, out4;
   float beta, omega;
+  std::uint32_t grad_z_interleaved, grad_y_interleaved, y_interleaved;
 };
 struct TransposePush {
   std::uint32_t in_dim, in_stride, out_dim, out_stride, weight_offset;
 };
 struct BackwardWeightsPush {
-  std::uint32_t batch, in4, out4, out_dim, k_blocks, blocks;
+  std::uint32_t batch, in4, out4, out_dim, k_blocks, blocks, dz_interleaved, x_interleaved;
 };
 struct ReducePartialsPush {
   std::uint32_t weights, biases, slabs, weight_offset, bias_offset, accumulate;
@@ -88,13 +93,15 @@ Mlp::Block Mlp::block_for(std::uint32_t in_stride) const {
 }
 
 void Mlp::record_product(gpu::Stream& stream, const Product& p, gpu::BufferRange x, gpu::BufferRange y,
-                         gpu::BufferRange z, std::uint32_t batch) const {
+                         gpu::BufferRange z, std::uint32_t batch, Layouts layouts) const {
   const Block block = block_for(p.in_stride);
   const std::uint32_t cols = block.cols, in4 = p.in_stride / 4;
   const std::string variant = "nn/mlp_forward:c" + std::to_string(cols) + "s" + std::to_string(block.samples);
   const std::uint64_t align = std::max<std::uint64_t>(4, context_.info().limits.min_uniform_buffer_offset_alignment / 4);
   const std::uint64_t buffer_floats = p.weights->bytes() / 4;
-  const std::uint64_t invocations = (std::uint64_t(batch) + block.samples - 1) / block.samples;
+  // Each group of kRowGroup invocations takes kRowGroup x samples neighbouring samples.
+  const std::uint64_t per_group = std::uint64_t(kRowGroup) * block.samples;
+  const std::uint64_t invocations = (std::uint64_t(batch) + per_group - 1) / per_group * kRowGroup;
   for (std::uint32_t first = 0; first < p.out_dim; first += cols) {
     const std::uint32_t rows = std::min(cols, p.out_dim - first);
     for (std::uint32_t k4 = 0; k4 < in4; k4 += kInputChunk4) {
@@ -121,7 +128,9 @@ void Mlp::record_product(gpu::Stream& stream, const Product& p, gpu::BufferRange
                              first_chunk ? 0u : 1u,
                              std::uint32_t((start - base) / 4),
                              in4,
-                             k4};
+                             k4,
+                             layouts.x_interleaved,
+                             layouts.y_interleaved};
       stream.dispatch(k, {y, store_z ? z : gpu::BufferRange{}, p.weights->range_bytes(base * 4, window * 4), p.biases, x},
                       push, gpu::Elements(invocations));
     }
@@ -129,10 +138,10 @@ void Mlp::record_product(gpu::Stream& stream, const Product& p, gpu::BufferRange
 }
 
 void Mlp::record_layer_forward(gpu::Stream& stream, const LayerShape& l, gpu::BufferRange x, gpu::BufferRange y,
-                               gpu::BufferRange z, std::uint32_t batch) const {
+                               gpu::BufferRange z, std::uint32_t batch, Layouts layouts) const {
   const Product p{parameters_.get(), l.weight_offset, l.in_stride, l.out, l.out_stride,
                   parameters_->range(l.bias_offset, l.out), l.activation};
-  record_product(stream, p, x, y, z, batch);
+  record_product(stream, p, x, y, z, batch, layouts);
 }
 
 Mlp::Workspace::Workspace(const Mlp& mlp, std::uint32_t batch) : batch_(batch) {
@@ -143,19 +152,23 @@ Mlp::Workspace::Workspace(const Mlp& mlp, std::uint32_t batch) : batch_(batch) {
     widest = std::max({widest, l.in_stride, l.out_stride});
     largest_transpose = std::max<std::uint64_t>(largest_transpose, std::uint64_t(l.in) * l.out_stride);
   }
-  const std::uint64_t bytes = std::uint64_t(widest) * batch * 4;
+  const std::uint64_t bytes = std::uint64_t(widest) * interleaved_rows(batch) * 4;
   const gpu::DeviceLimits& lim = ctx.info().limits;
   if (bytes > lim.max_storage_buffer_range || bytes / 16 > lim.max_texel_buffer_elements)
     throw InputError("mlp batch of " + std::to_string(batch) + " samples needs " + std::to_string(bytes) +
                      " bytes per layer, over the device's binding range; train with smaller batches");
-  for (const LayerShape& l : mlp.layers_) {
-    y_.push_back(std::make_unique<gpu::Buffer<float>>(ctx, std::uint64_t(l.out_stride) * batch, "mlp activations"));
+  const std::uint64_t rows = interleaved_rows(batch);
+  for (std::size_t li = 0; li < mlp.layers_.size(); ++li) {
+    const LayerShape& l = mlp.layers_[li];
+    // Hidden layers interleaved (padded to a whole group), the output sample-major.
+    const std::uint64_t floats = std::uint64_t(l.out_stride) * (li + 1 < mlp.layers_.size() ? rows : batch);
+    y_.push_back(std::make_unique<gpu::Buffer<float>>(ctx, floats, "mlp activations"));
     z_.push_back(l.activation.type == Activation::Sine
-                     ? std::make_unique<gpu::Buffer<float>>(ctx, std::uint64_t(l.out_stride) * batch, "mlp pre-activations")
+                     ? std::make_unique<gpu::Buffer<float>>(ctx, floats, "mlp pre-activations")
                      : nullptr);
   }
-  grad_a_ = std::make_unique<gpu::Buffer<float>>(ctx, std::uint64_t(widest) * batch, "mlp grad a");
-  grad_b_ = std::make_unique<gpu::Buffer<float>>(ctx, std::uint64_t(widest) * batch, "mlp grad b");
+  grad_a_ = std::make_unique<gpu::Buffer<float>>(ctx, std::uint64_t(widest) * rows, "mlp grad a");
+  grad_b_ = std::make_unique<gpu::Buffer<float>>(ctx, std::uint64_t(widest) * rows, "mlp grad b");
   transposed_ = std::make_unique<gpu::Buffer<float>>(ctx, largest_transpose, "mlp transposed weights");
   std::uint64_t most = 0;
   for (const LayerShape& l : mlp.layers_) most = std::max(most, layer_parameters(l));
@@ -168,7 +181,8 @@ void Mlp::forward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input) co
   gpu::BufferRange x = input;
   for (std::size_t li = 0; li < layers_.size(); ++li) {
     const gpu::BufferRange z = ws.z_[li] ? ws.z_[li]->whole() : gpu::BufferRange{};
-    record_layer_forward(stream, layers_[li], x, ws.y_[li]->whole(), z, ws.batch_);
+    record_layer_forward(stream, layers_[li], x, ws.y_[li]->whole(), z, ws.batch_,
+                         {li > 0 ? 1u : 0u, li + 1 < layers_.size() ? 1u : 0u});
     x = ws.y_[li]->whole();
   }
 }
@@ -187,14 +201,15 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
   gpu::Buffer<float>* buffers[2] = {ws.grad_a_.get(), ws.grad_b_.get()};
   for (std::size_t li = layers_.size(); li-- > 0;) {
     const LayerShape& l = layers_[li];
-    const std::uint64_t count = std::uint64_t(l.out_stride) * batch;
-    const gpu::BufferRange dz = buffers[li % 2]->range(0, count);
+    const bool last = li + 1 == layers_.size();
+    const std::uint64_t count = std::uint64_t(l.out_stride) * interleaved_rows(batch);
+    const gpu::BufferRange dz = buffers[li % 2]->range(0, count);  // interleaved
     const gpu::BufferRange z = ws.z_[li] ? ws.z_[li]->whole() : gpu::BufferRange{};
     const gpu::Kernel& act =
         context_.kernel("nn/mlp_activation_backward", {{0, 256}, {1, std::uint32_t(l.activation.type)}});
     stream.dispatch(act, {dz, grad_y, ws.y_[li]->whole(), z},
-                    ActivationBackwardPush{std::uint32_t(count / 4), l.out, l.out_stride / 4, l.activation.beta,
-                                           l.activation.omega},
+                    ActivationBackwardPush{std::uint32_t(count / 4), batch, l.out, l.out_stride / 4, l.activation.beta,
+                                           l.activation.omega, 1u, last ? 0u : 1u, last ? 0u : 1u},
                     gpu::Elements(count / 4));
     const gpu::BufferRange x = li == 0 ? input : ws.y_[li - 1]->whole();
     const gpu::Kernel& weights =
@@ -202,7 +217,8 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
     const std::uint32_t k_blocks = (l.in_stride / 4 + 1 + kWeightBlockK - 1) / kWeightBlockK;
     const std::uint32_t blocks = slabs * k_blocks * (l.out_stride / 4);
     stream.dispatch(weights, {ws.partials_->whole(), dz, x},
-                    BackwardWeightsPush{batch, l.in_stride / 4, l.out_stride / 4, l.out, k_blocks, blocks},
+                    BackwardWeightsPush{batch, l.in_stride / 4, l.out_stride / 4, l.out, k_blocks, blocks, 1u,
+                                        li > 0 ? 1u : 0u},
                     gpu::Elements(blocks));
     stream.dispatch(reduce, {ws.partials_->whole(), gradients_->whole()},
                     ReducePartialsPush{l.out * l.in_stride, l.out, slabs, std::uint32_t(l.weight_offset),
@@ -215,9 +231,9 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
                     TransposePush{l.in, l.in_stride, l.out, l.out_stride, std::uint32_t(l.weight_offset)},
                     gpu::Elements(transposed));
     const gpu::BufferRange dx =
-        li == 0 ? grad_input : buffers[(li + 1) % 2]->range(0, std::uint64_t(l.in_stride) * batch);
+        li == 0 ? grad_input : buffers[(li + 1) % 2]->range(0, std::uint64_t(l.in_stride) * interleaved_rows(batch));
     const Product p{ws.transposed_.get(), 0, l.out_stride, l.in, l.in_stride, {}, {Activation::None}};
-    record_product(stream, p, dz, dx, {}, batch);
+    record_product(stream, p, dz, dx, {}, batch, {1u, li > 0 ? 1u : 0u});
     grad_y = dx;
   }
 }
@@ -228,11 +244,13 @@ void Mlp::infer(gpu::Stream& stream, gpu::BufferRange input, gpu::BufferRange ou
     throw InternalError("mlp infer: input or output smaller than batch rows");
   std::uint64_t widest = 0;
   for (const LayerShape& l : layers_) widest = std::max<std::uint64_t>({widest, l.in_stride, l.out_stride});
-  const std::uint64_t chunk = std::min<std::uint64_t>(
+  std::uint64_t chunk = std::min<std::uint64_t>(
       {batch, kMaxInferenceChunk, gpu::items_per_chunk(context_, {std::uint64_t(input_stride()) * 4,
                                                                   std::uint64_t(output_stride()) * 4, widest * 4})});
-  const gpu::BufferRange a = stream.scratch(widest * chunk * 4, "mlp inference a");
-  const gpu::BufferRange b = stream.scratch(widest * chunk * 4, "mlp inference b");
+  // Whole groups of kRowGroup samples per chunk, so the interleaved scratch stays within a binding.
+  if (chunk < batch && chunk >= kRowGroup) chunk = chunk / kRowGroup * kRowGroup;
+  const gpu::BufferRange a = stream.scratch(widest * interleaved_rows(chunk) * 4, "mlp inference a");
+  const gpu::BufferRange b = stream.scratch(widest * interleaved_rows(chunk) * 4, "mlp inference b");
   for (std::uint64_t first = 0; first < batch; first += chunk) {
     const std::uint32_t n = std::uint32_t(std::min(chunk, batch - first));
     gpu::BufferRange x = gpu::sub_range(input, 4, first * input_stride(), std::uint64_t(n) * input_stride());
@@ -240,8 +258,8 @@ void Mlp::infer(gpu::Stream& stream, gpu::BufferRange input, gpu::BufferRange ou
       const LayerShape& l = layers_[li];
       const bool last = li + 1 == layers_.size();
       const gpu::BufferRange y = last ? gpu::sub_range(output, 4, first * output_stride(), std::uint64_t(n) * output_stride())
-                                      : gpu::sub_range(li % 2 ? b : a, 4, 0, std::uint64_t(l.out_stride) * n);
-      record_layer_forward(stream, l, x, y, {}, n);
+                                      : gpu::sub_range(li % 2 ? b : a, 4, 0, std::uint64_t(l.out_stride) * interleaved_rows(n));
+      record_layer_forward(stream, l, x, y, {}, n, {li > 0 ? 1u : 0u, last ? 0u : 1u});
       x = y;
     }
   }

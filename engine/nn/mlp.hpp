@@ -1,8 +1,9 @@
 #pragma once
 // A multilayer perceptron on the GPU: training forward that keeps what the adjoint needs, the
 // adjoint to inputs and parameters (parameter gradients reduced without atomics), and streamed
-// inference over batches of any size. Tensors are sample-major rows padded to 4 floats (see
-// mlp_config.hpp). Shaders: shaders/nn/mlp_*.comp.
+// inference over batches of any size. Tensors in and out are sample-major rows padded to 4 floats
+// (see mlp_config.hpp); the hidden activations and gradients inside a Workspace are lane-
+// interleaved in groups of 8 samples (shaders/include/nf_rows.glsl). Shaders: shaders/nn/mlp_*.comp.
 #include <memory>
 #include <string>
 #include <vector>
@@ -66,10 +67,14 @@ class Mlp {
     gpu::BufferRange biases;  // empty: no bias
     ActivationSpec activation;
   };
+  // Layouts of x and of y (and z): 1 = lane-interleaved (hidden tensors), 0 = sample-major.
+  struct Layouts {
+    std::uint32_t x_interleaved, y_interleaved;
+  };
   void record_product(gpu::Stream& stream, const Product& product, gpu::BufferRange x, gpu::BufferRange y,
-                      gpu::BufferRange z, std::uint32_t batch) const;
+                      gpu::BufferRange z, std::uint32_t batch, Layouts layouts) const;
   void record_layer_forward(gpu::Stream& stream, const LayerShape& layer, gpu::BufferRange x, gpu::BufferRange y,
-                            gpu::BufferRange z, std::uint32_t batch) const;
+                            gpu::BufferRange z, std::uint32_t batch, Layouts layouts) const;
   // mlp_forward's block (output rows x samples per invocation) for inputs of this stride: the
   // device kind's preferred one that fits its uniform buffers.
   struct Block {

@@ -4,7 +4,8 @@
 //
 // Layout (shared by the GPU kernels and the CPU reference):
 // - a batch of F features is B rows of pad4(F) floats (sample-major; the padding holds zeros), so an
-//   invocation reads its sample's features four at a time;
+//   invocation reads its sample's features four at a time (inside an Mlp the hidden layers'
+//   tensors are lane-interleaved instead: shaders/include/nf_rows.glsl);
 // - per layer: weights [out][pad4(in)] row-major (padding columns zero), then biases [out]; both
 //   blocks start on a multiple of 64 floats, so blocks of weight rows and the biases can be bound as
 //   uniform buffers on any device (minUniformBufferOffsetAlignment <= 256 bytes). Alignment gaps

@@ -2,8 +2,9 @@
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 // dL/dz = dL/dy * act'(z) for one layer, elementwise over [batch][out_stride], four values per
-// invocation; padding columns get zero. grad_y and grad_z may be the same range (each value is
-// read before its invocation writes it). Reads are texel fetches (straight-line gathers on
+// invocation in grad_z's layout (nf_rows.glsl; the others may be laid out otherwise); padding
+// columns and padding samples get zero. grad_y and grad_z may be the same range only when laid
+// out alike (each value is then read before its invocation writes it). Reads are texel fetches (straight-line gathers on
 // lavapipe, where storage-buffer loads loop over the lanes) and the activation is a
 // specialisation constant (lavapipe evaluates both sides of a branch).
 
@@ -12,6 +13,7 @@ layout(constant_id = 1) const uint ACTIVATION = 0;  // NF_ACT_*
 layout(local_size_x_id = 0) in;
 #include "nf_index.glsl"
 #include "nf_activation.glsl"
+#include "nf_rows.glsl"
 
 layout(std430, binding = 0) writeonly buffer GradZ { vec4 grad_z[]; };
 layout(binding = 16) uniform samplerBuffer grad_y;
@@ -19,27 +21,37 @@ layout(binding = 17) uniform samplerBuffer y;  // the layer's output (ReLU, Soft
 layout(binding = 18) uniform samplerBuffer z;  // its pre-activation (Sine)
 
 layout(push_constant) uniform Push {
-  uint count4;  // batch * out_stride / 4
+  uint count4;  // vec4 of grad_z: samples (rounded up to 8 when interleaved) * out4
+  uint batch;
   uint out_dim;
   uint out4;    // out_stride / 4
   float beta;
   float omega;
+  uint grad_z_interleaved;  // nf_rows.glsl layouts
+  uint grad_y_interleaved;
+  uint y_interleaved;       // of y and z
 } pc;
 
 void main() {
   const uint i = nf_linear_index();
   if (i >= pc.count4) return;
-  const uint column = (i % pc.out4) * 4u;
-  const vec4 g = texelFetch(grad_y, int(i));
+  // The sample and vec4 of element i of grad_z, and where they lie in the other tensors.
+  const bool interleaved = pc.grad_z_interleaved != 0u;
+  const uint f4 = interleaved ? (i / NF_ROW_GROUP) % pc.out4 : i % pc.out4;
+  const uint s = interleaved ? (i / (NF_ROW_GROUP * pc.out4)) * NF_ROW_GROUP + i % NF_ROW_GROUP : i / pc.out4;
+  const uint s_read = min(s, pc.batch - 1u);
+  const uint column = f4 * 4u;
+  const int y_at = int(nf_row_index(s_read, f4, pc.out4, pc.y_interleaved != 0u));
+  const vec4 g = texelFetch(grad_y, int(nf_row_index(s_read, f4, pc.out4, pc.grad_y_interleaved != 0u)));
   vec4 d = vec4(1.0);
   if (ACTIVATION == NF_ACT_SINE) {
-    const vec4 zv = texelFetch(z, int(i));
+    const vec4 zv = texelFetch(z, y_at);
     [[unroll]] for (uint e = 0u; e < 4u; ++e) d[e] = nf_activate_derivative(ACTIVATION, pc.beta, pc.omega, 0.0, zv[e]);
   } else if (ACTIVATION != NF_ACT_NONE) {
-    const vec4 yv = texelFetch(y, int(i));
+    const vec4 yv = texelFetch(y, y_at);
     [[unroll]] for (uint e = 0u; e < 4u; ++e) d[e] = nf_activate_derivative(ACTIVATION, pc.beta, pc.omega, yv[e], 0.0);
   }
   vec4 out_grad;
-  [[unroll]] for (uint e = 0u; e < 4u; ++e) out_grad[e] = column + e < pc.out_dim ? g[e] * d[e] : 0.0;
+  [[unroll]] for (uint e = 0u; e < 4u; ++e) out_grad[e] = column + e < pc.out_dim && s < pc.batch ? g[e] * d[e] : 0.0;
   grad_z[i] = out_grad;
 }

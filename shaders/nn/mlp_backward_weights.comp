@@ -18,12 +18,13 @@ layout(constant_id = 1) const uint SLAB = 512;  // samples per slab (a multiple 
 layout(constant_id = 2) const uint KV = 2;      // input vec4 per block
 layout(local_size_x_id = 0) in;
 #include "nf_index.glsl"
+#include "nf_rows.glsl"
 
 const uint UNROLL = 8u;  // samples per loop trip: a trip costs a mask update per accumulator
 
 layout(std430, binding = 0) writeonly buffer Partials { float partials[]; };  // [slab][out*in_stride + out]
-layout(binding = 16) uniform samplerBuffer dz;  // [batch][out4]
-layout(binding = 17) uniform samplerBuffer x;   // [batch][in4]
+layout(binding = 16) uniform samplerBuffer dz;  // [batch][out4]: nf_rows.glsl
+layout(binding = 17) uniform samplerBuffer x;   // [batch][in4]: nf_rows.glsl
 
 layout(push_constant) uniform Push {
   uint batch;
@@ -32,6 +33,8 @@ layout(push_constant) uniform Push {
   uint out_dim;
   uint k_blocks;  // ceil((in4 + 1) / KV)
   uint blocks;    // slabs * k_blocks * out4
+  uint dz_interleaved;  // nf_rows.glsl layouts
+  uint x_interleaved;
 } pc;
 
 void main() {
@@ -50,10 +53,10 @@ void main() {
   do {
     [[unroll]] for (uint u = 0u; u < UNROLL; ++u) {
       const uint s = base + u, s_read = min(s, pc.batch - 1u);
-      const vec4 a = texelFetch(dz, int(s_read * pc.out4 + o4));
+      const vec4 a = texelFetch(dz, int(nf_row_index(s_read, o4, pc.out4, pc.dz_interleaved != 0u)));
       [[unroll]] for (uint v = 0u; v < KV; ++v) {
         const uint k4 = k0 + v;
-        const vec4 fetched = texelFetch(x, int(s_read * pc.in4 + min(k4, pc.in4 - 1u)));
+        const vec4 fetched = texelFetch(x, int(nf_row_index(s_read, min(k4, pc.in4 - 1u), pc.in4, pc.x_interleaved != 0u)));
         vec4 b = k4 < pc.in4 ? fetched : k4 == pc.in4 ? vec4(1.0, 0.0, 0.0, 0.0) : vec4(0.0);
         b = s < last ? b : vec4(0.0);
         [[unroll]] for (uint c = 0u; c < 4u; ++c) acc[4u * v + c] = fma(a, vec4(b[c]), acc[4u * v + c]);

@@ -29,15 +29,16 @@ layout(constant_id = 5) const bool STORE_Z = false;  // keep pre-activations (Si
 layout(local_size_x_id = 0) in;
 #include "nf_index.glsl"
 #include "nf_activation.glsl"
+#include "nf_rows.glsl"
 
-layout(std430, binding = 0) buffer Output { vec4 y[]; };                   // [batch][out4]
+layout(std430, binding = 0) buffer Output { vec4 y[]; };                   // [batch][out4]: nf_rows.glsl
 layout(std430, binding = 1) writeonly buffer PreActivation { vec4 z[]; };  // when STORE_Z
 // This dispatch's rows, stride4 vec4 apart, from vec4 w_base on: the binding starts at an offset
 // the device accepts and w_base covers the rest; it spans up to 64 KiB (less where the device's
 // uniform range or the buffer ends sooner).
 layout(std140, binding = 12) uniform Weights { vec4 w[4096]; };
 layout(std140, binding = 13) uniform Biases { vec4 b4[256]; };  // the layer's biases
-layout(binding = 16) uniform samplerBuffer x;                   // [batch][x_stride4]
+layout(binding = 16) uniform samplerBuffer x;                   // [batch][x_stride4]: nf_rows.glsl
 
 layout(push_constant) uniform Push {
   uint batch;
@@ -52,12 +53,17 @@ layout(push_constant) uniform Push {
   uint w_base;      // first vec4 of this dispatch's block in the weights binding
   uint stride4;     // vec4 per input row: between rows of x and between weight rows
   uint x_first4;    // first input vec4 of this chunk
+  uint x_interleaved;  // nf_rows.glsl layouts of x and of y (and z)
+  uint y_interleaved;
 } pc;
 
 void main() {
-  const uint first_sample = nf_linear_index() * SAMPLES;
+  // Eight neighbouring invocations take eight neighbouring samples, SAMPLES times.
+  const uint index = nf_linear_index();
+  const uint first_sample = (index / NF_ROW_GROUP) * NF_ROW_GROUP * SAMPLES + index % NF_ROW_GROUP;
   uint s[SAMPLES];  // this invocation's samples, clamped into the batch for reading
-  [[unroll]] for (uint t = 0u; t < SAMPLES; ++t) s[t] = min(first_sample + t, pc.batch - 1u);
+  [[unroll]] for (uint t = 0u; t < SAMPLES; ++t) s[t] = min(first_sample + NF_ROW_GROUP * t, pc.batch - 1u);
+  const bool x_interleaved = pc.x_interleaved != 0u, y_interleaved = pc.y_interleaved != 0u;
 
   float acc[SAMPLES][COLS];
   [[unroll]] for (uint c = 0u; c < COLS; ++c) {
@@ -68,7 +74,7 @@ void main() {
   }
   [[unroll]] for (uint k4 = 0u; k4 < IN4; ++k4) {
     vec4 xv[SAMPLES];
-    [[unroll]] for (uint t = 0u; t < SAMPLES; ++t) xv[t] = texelFetch(x, int(s[t] * pc.stride4 + pc.x_first4 + k4));
+    [[unroll]] for (uint t = 0u; t < SAMPLES; ++t) xv[t] = texelFetch(x, int(nf_row_index(s[t], pc.x_first4 + k4, pc.stride4, x_interleaved)));
     [[unroll]] for (uint c = 0u; c < COLS; ++c) {
       const vec4 wv = w[pc.w_base + min(c, pc.rows - 1u) * pc.stride4 + k4];
       [[unroll]] for (uint t = 0u; t < SAMPLES; ++t)
@@ -78,9 +84,9 @@ void main() {
   [[unroll]] for (uint t = 0u; t < SAMPLES; ++t) {
     [[unroll]] for (uint j = 0u; j < COLS / 4u; ++j) {
       const uint o = pc.row_first + 4u * j;
-      const uint i = s[t] * pc.out4 + min(o, 4u * pc.out4 - 4u) / 4u;
+      const uint i = nf_row_index(s[t], min(o, 4u * pc.out4 - 4u) / 4u, pc.out4, y_interleaved);
       vec4 pre = vec4(acc[t][4u * j], acc[t][4u * j + 1u], acc[t][4u * j + 2u], acc[t][4u * j + 3u]);
-      if (4u * j < pc.rows && first_sample + t < pc.batch) {
+      if (4u * j < pc.rows && first_sample + NF_ROW_GROUP * t < pc.batch) {
         // The earlier chunks' sums, by storage load under the branch: the first chunk skips it
         // entirely, where a texel fetch would read for every chunk (the two measured the same).
         if (pc.accumulate != 0u) pre += y[i];
