@@ -125,9 +125,10 @@ TEST_CASE("dispatch asserts binding count, push-constant size and binding ranges
   CHECK_THROWS_WITH_AS(s.fill(past_end, 0), doctest::Contains("lies outside"), InternalError);
   CHECK_THROWS_WITH_AS(require_bytes(a.range(0, 4), 32, "probe"), doctest::Contains("probe: range of 16 bytes"),
                        InternalError);
-  // A texel-buffer range is read as whole RGBA32F texels.
+  // A texel-buffer range is read as whole RGBA32F texels (a push block of the kernel's size).
   const Kernel& texel = ctx.kernel("nn/mlp_backward_weights");
-  CHECK_THROWS_WITH_AS(s.dispatch(texel, {a, b.range(0, 3), b}, std::array<std::uint32_t, 6>{}, Elements(1)),
+  REQUIRE(texel.layout().push_constant_size == sizeof(std::array<std::uint32_t, 8>));
+  CHECK_THROWS_WITH_AS(s.dispatch(texel, {a, b.range(0, 3), b}, std::array<std::uint32_t, 8>{}, Elements(1)),
                        doctest::Contains("not a whole number of vec4 texels"), InternalError);
   const std::uint64_t range = ctx.info().limits.max_storage_buffer_range;
   if (range + 64 <= ctx.info().limits.max_allocation_size) {
