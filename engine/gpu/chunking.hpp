@@ -26,13 +26,13 @@ inline BufferRange sub_range(BufferRange range, std::uint64_t element_bytes, std
 }
 
 // Items (strands, rays...) per chunk when each item owns `bytes_per_item` bytes in several arrays:
-// every array's chunk fits one storage or RGBA32F texel binding and starts on both alignments.
+// every array's chunk fits one storage binding and starts on both the storage and the texel offset
+// alignment (callers that bind texel views bound maxTexelBufferElements themselves).
 inline std::uint64_t items_per_chunk(const Context& context, std::initializer_list<std::uint64_t> bytes_per_item) {
   const DeviceLimits& l = context.info().limits;
   const std::uint64_t align = std::lcm(std::max<std::uint64_t>(1, l.min_storage_buffer_offset_alignment),
                                        std::max<std::uint64_t>(1, l.min_texel_buffer_offset_alignment));
-  std::uint64_t range = std::min<std::uint64_t>(l.max_storage_buffer_range, 1ull << 32);
-  if (l.max_texel_buffer_elements) range = std::min<std::uint64_t>(range, l.max_texel_buffer_elements * 16);
+  const std::uint64_t range = std::min<std::uint64_t>(l.max_storage_buffer_range, 1ull << 32);
   std::uint64_t step = 1, most = ~0ull;
   for (const std::uint64_t b : bytes_per_item) {
     if (b == 0) continue;

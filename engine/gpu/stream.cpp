@@ -168,12 +168,13 @@ Stream::~Stream() {
     for (auto& b : s.scratch) (void)b.release();
     return;
   }
-  s.destroy_views();
+  // The command buffer first: destroying a view it still records would invalidate it.
   if (s.recording) vkEndCommandBuffer(s.cmd);
+  vkFreeCommandBuffers(m.device, m.command_pool, 1, &s.cmd);
+  s.destroy_views();
   for (auto pool : s.pools) vkDestroyDescriptorPool(m.device, pool, nullptr);
   if (s.queries) vkDestroyQueryPool(m.device, s.queries, nullptr);
   vkDestroyFence(m.device, s.fence, nullptr);
-  vkFreeCommandBuffers(m.device, m.command_pool, 1, &s.cmd);
   for (auto& b : s.scratch) m.release_scratch(std::move(b));
 }
 

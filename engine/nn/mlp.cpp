@@ -173,12 +173,17 @@ Mlp::Workspace::Workspace(const Mlp& mlp, std::uint32_t batch) : batch_(batch) {
   std::uint64_t most = 0;
   for (const LayerShape& l : mlp.layers_) most = std::max(most, layer_parameters(l));
   const std::uint64_t slabs = std::max<std::uint64_t>(1, (std::uint64_t(batch) + kSlab - 1) / kSlab);
+  if (slabs * most * 4 > lim.max_storage_buffer_range)
+    throw InputError("mlp batch of " + std::to_string(batch) + " samples needs " + std::to_string(slabs * most * 4) +
+                     " bytes of per-slab weight-gradient partials, over the device's binding range; train with "
+                     "smaller batches");
   partials_ = std::make_unique<gpu::Buffer<float>>(ctx, slabs * most, "mlp partial grads");
 }
 
 void Mlp::forward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input) const {
   gpu::require_bytes(input, std::uint64_t(input_stride()) * ws.batch_ * 4, "mlp forward input");
-  gpu::BufferRange x = input;
+  // Bind just the batch's rows: they are read as a texel buffer, whose range has its own limit.
+  gpu::BufferRange x = gpu::sub_range(input, 4, 0, std::uint64_t(input_stride()) * ws.batch_);
   for (std::size_t li = 0; li < layers_.size(); ++li) {
     const gpu::BufferRange z = ws.z_[li] ? ws.z_[li]->whole() : gpu::BufferRange{};
     record_layer_forward(stream, layers_[li], x, ws.y_[li]->whole(), z, ws.batch_,
@@ -194,6 +199,10 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
   gpu::require_bytes(input, std::uint64_t(batch) * input_stride() * 4, "mlp backward input");
   gpu::require_bytes(grad_output, std::uint64_t(batch) * output_stride() * 4, "mlp output gradient");
   if (grad_input.size) gpu::require_bytes(grad_input, std::uint64_t(batch) * input_stride() * 4, "mlp input gradient");
+  // Just the batch's rows of the caller's tensors (texel ranges have their own limit).
+  input = gpu::sub_range(input, 4, 0, std::uint64_t(batch) * input_stride());
+  grad_output = gpu::sub_range(grad_output, 4, 0, std::uint64_t(batch) * output_stride());
+  if (grad_input.size) grad_input = gpu::sub_range(grad_input, 4, 0, std::uint64_t(batch) * input_stride());
   const gpu::Kernel& transpose = context_.kernel("nn/mlp_transpose", {{0, 256}});
   const gpu::Kernel& reduce = context_.kernel("nn/mlp_reduce_partials", {{0, 256}});
   const std::uint32_t slabs = (batch + kSlab - 1) / kSlab;
@@ -244,11 +253,14 @@ void Mlp::infer(gpu::Stream& stream, gpu::BufferRange input, gpu::BufferRange ou
     throw InternalError("mlp infer: input or output smaller than batch rows");
   std::uint64_t widest = 0;
   for (const LayerShape& l : layers_) widest = std::max<std::uint64_t>({widest, l.in_stride, l.out_stride});
-  std::uint64_t chunk = std::min<std::uint64_t>(
-      {batch, kMaxInferenceChunk, gpu::items_per_chunk(context_, {std::uint64_t(input_stride()) * 4,
-                                                                  std::uint64_t(output_stride()) * 4, widest * 4})});
-  // Whole groups of kRowGroup samples per chunk, so the interleaved scratch stays within a binding.
-  if (chunk < batch && chunk >= kRowGroup) chunk = chunk / kRowGroup * kRowGroup;
+  const gpu::DeviceLimits& lim = context_.info().limits;
+  const std::uint64_t fits = std::min(
+      gpu::items_per_chunk(context_, {std::uint64_t(input_stride()) * 4, std::uint64_t(output_stride()) * 4, widest * 4}),
+      lim.max_texel_buffer_elements * 16 / (widest * 4));
+  std::uint64_t chunk = std::min<std::uint64_t>({batch, kMaxInferenceChunk, fits});
+  // The interleaved scratch holds whole groups of kRowGroup samples: keep them within a binding,
+  // in chunks of a multiple of 64 samples (which keeps them on the offset alignment too).
+  if (interleaved_rows(chunk) > fits && chunk >= 64) chunk = chunk / 64 * 64;
   const gpu::BufferRange a = stream.scratch(widest * interleaved_rows(chunk) * 4, "mlp inference a");
   const gpu::BufferRange b = stream.scratch(widest * interleaved_rows(chunk) * 4, "mlp inference b");
   for (std::uint64_t first = 0; first < batch; first += chunk) {

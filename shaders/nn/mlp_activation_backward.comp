@@ -39,17 +39,18 @@ void main() {
   const bool interleaved = pc.grad_z_interleaved != 0u;
   const uint f4 = interleaved ? (i / NF_ROW_GROUP) % pc.out4 : i % pc.out4;
   const uint s = interleaved ? (i / (NF_ROW_GROUP * pc.out4)) * NF_ROW_GROUP + i % NF_ROW_GROUP : i / pc.out4;
-  const uint s_read = min(s, pc.batch - 1u);
   const uint column = f4 * 4u;
-  const int y_at = int(nf_row_index(s_read, f4, pc.out4, pc.y_interleaved != 0u));
-  const vec4 g = texelFetch(grad_y, int(nf_row_index(s_read, f4, pc.out4, pc.grad_y_interleaved != 0u)));
-  vec4 d = vec4(1.0);
-  if (ACTIVATION == NF_ACT_SINE) {
-    const vec4 zv = texelFetch(z, y_at);
-    [[unroll]] for (uint e = 0u; e < 4u; ++e) d[e] = nf_activate_derivative(ACTIVATION, pc.beta, pc.omega, 0.0, zv[e]);
-  } else if (ACTIVATION != NF_ACT_NONE) {
-    const vec4 yv = texelFetch(y, y_at);
-    [[unroll]] for (uint e = 0u; e < 4u; ++e) d[e] = nf_activate_derivative(ACTIVATION, pc.beta, pc.omega, yv[e], 0.0);
+  vec4 g = vec4(0.0), d = vec4(1.0);
+  if (s < pc.batch) {  // padding samples read nothing: done in place, their clamped reads would race
+    const int y_at = int(nf_row_index(s, f4, pc.out4, pc.y_interleaved != 0u));
+    g = texelFetch(grad_y, int(nf_row_index(s, f4, pc.out4, pc.grad_y_interleaved != 0u)));
+    if (ACTIVATION == NF_ACT_SINE) {
+      const vec4 zv = texelFetch(z, y_at);
+      [[unroll]] for (uint e = 0u; e < 4u; ++e) d[e] = nf_activate_derivative(ACTIVATION, pc.beta, pc.omega, 0.0, zv[e]);
+    } else if (ACTIVATION != NF_ACT_NONE) {
+      const vec4 yv = texelFetch(y, y_at);
+      [[unroll]] for (uint e = 0u; e < 4u; ++e) d[e] = nf_activate_derivative(ACTIVATION, pc.beta, pc.omega, yv[e], 0.0);
+    }
   }
   vec4 out_grad;
   [[unroll]] for (uint e = 0u; e < 4u; ++e) out_grad[e] = column + e < pc.out_dim && s < pc.batch ? g[e] * d[e] : 0.0;
