@@ -12,7 +12,8 @@ namespace {
 // SPIR-V opcodes and enums used here (stable across SPIR-V versions; spec section 3).
 enum : std::uint32_t {
   OpCapability = 17, OpExecutionMode = 16, OpTypeBool = 20, OpTypeInt = 21, OpTypeFloat = 22,
-  OpTypeVector = 23, OpTypeMatrix = 24, OpTypeImage = 25, OpTypeSampledImage = 27, OpTypeArray = 28, OpTypeStruct = 30, OpTypePointer = 32,
+  OpTypeVector = 23, OpTypeMatrix = 24, OpTypeImage = 25, OpTypeSampledImage = 27, OpTypeArray = 28,
+  OpTypeStruct = 30, OpTypePointer = 32,
   OpConstant = 43, OpSpecConstantTrue = 48, OpSpecConstantFalse = 49, OpSpecConstant = 50,
   OpSpecConstantComposite = 51, OpVariable = 59, OpDecorate = 71, OpMemberDecorate = 72,
   OpExecutionModeId = 331,
@@ -28,8 +29,6 @@ struct Type {
   std::vector<std::uint32_t> operands;  // words after the result id
 };
 
-}  // namespace
-
 const char* binding_kind_name(BindingKind kind) {
   switch (kind) {
     case BindingKind::uniform: return "uniform buffer";
@@ -37,6 +36,8 @@ const char* binding_kind_name(BindingKind kind) {
     default: return "storage buffer";
   }
 }
+
+}  // namespace
 
 KernelLayout reflect_spirv(std::span<const std::uint32_t> words, const std::string& name) {
   if (words.size() < 5 || words[0] != 0x07230203u)

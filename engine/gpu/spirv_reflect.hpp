@@ -37,8 +37,6 @@ struct KernelLayout {
   bool uses_int64 = false;
 };
 
-const char* binding_kind_name(BindingKind kind);
-
 // Throws InternalError naming `name` if the module is malformed or uses descriptor sets other than 0.
 KernelLayout reflect_spirv(std::span<const std::uint32_t> words, const std::string& name);
 

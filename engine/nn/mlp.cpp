@@ -63,7 +63,7 @@ std::uint64_t layer_parameters(const LayerShape& l) { return std::uint64_t(l.out
 }  // namespace
 
 Mlp::Mlp(gpu::Context& context, const MlpConfig& config, const std::string& name)
-    : context_(context), config_(config) {
+    : context_(context), config_(config), gpu_blocks_(gpu::use_gpu_layout(context, "NF_MLP_GPU_BLOCKS")) {
   config_.validate();
   layers_ = config_.layers();
   for (const LayerShape& l : layers_) {
@@ -84,8 +84,7 @@ Mlp::Block Mlp::block_for(std::uint32_t in_stride) const {
   // mlp_forward's weight window: COLS rows of in_stride floats plus 16 vec4 of alignment slack.
   const std::uint64_t capacity = weight_window4();
   const std::span<const ForwardBlock> blocks =
-      gpu::use_gpu_layout(context_, "NF_MLP_GPU_BLOCKS") ? std::span<const ForwardBlock>(kGpuBlocks)
-                                                         : std::span<const ForwardBlock>(kCpuBlocks);
+      gpu_blocks_ ? std::span<const ForwardBlock>(kGpuBlocks) : std::span<const ForwardBlock>(kCpuBlocks);
   for (const ForwardBlock& b : blocks)
     if (std::uint64_t(b.cols) * (in_stride / 4) + 16 <= capacity) return {b.cols, b.samples};
   throw DeviceError("mlp: a layer with " + std::to_string(in_stride) + " inputs needs more uniform-buffer range than "

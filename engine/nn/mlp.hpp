@@ -84,9 +84,9 @@ class Mlp {
   // vec4 in mlp_forward's uniform weight window on this device.
   std::uint64_t weight_window4() const;
 
-
   gpu::Context& context_;
   MlpConfig config_;
+  bool gpu_blocks_;  // mlp_forward's GPU blocks (on GPUs, or NF_MLP_GPU_BLOCKS=1)
   std::vector<LayerShape> layers_;
   std::unique_ptr<gpu::Buffer<float>> parameters_, gradients_;
 };

@@ -14,6 +14,21 @@
 using namespace nf;
 using namespace nf::nn;
 
+namespace {
+
+// One forward and backward of `mlp` over `batch` samples, waited for; the workspace holds the output.
+Mlp::Workspace training_pass(Mlp& mlp, std::uint32_t batch, const gpu::Buffer<float>& input,
+                             const gpu::Buffer<float>& grad_output, const gpu::Buffer<float>& grad_input) {
+  Mlp::Workspace ws(mlp, batch);
+  gpu::Stream s(test::context());
+  mlp.forward(s, ws, input);
+  mlp.backward(s, ws, input, grad_output, grad_input, false);
+  s.submit_and_wait();
+  return ws;
+}
+
+}  // namespace
+
 TEST_CASE("frequency encoding keeps float accuracy for |x| up to 1e3 at 2^9") {
   auto& ctx = test::context();
   const FrequencyEncodingConfig c{3, 10, false};
@@ -103,11 +118,7 @@ TEST_CASE("MLP gradients over several slabs and odd widths match the reference")
   gpu::Buffer<float> input(ctx, std::span<const float>(to_float(in)), "input");
   gpu::Buffer<float> grad_output(ctx, std::span<const float>(to_float(grad_out)), "grad out");
   gpu::Buffer<float> grad_input(ctx, std::uint64_t(mlp.input_stride()) * batch, "grad in");
-  Mlp::Workspace ws(mlp, batch);
-  gpu::Stream s(ctx);
-  mlp.forward(s, ws, input);
-  mlp.backward(s, ws, input, grad_output, grad_input, false);
-  s.submit_and_wait();
+  training_pass(mlp, batch, input, grad_output, grad_input);
 
   const auto trace = mlp_forward_ref<double>(c, params, in, batch);
   std::vector<double> want_params(params.size(), 0.0);
@@ -146,11 +157,7 @@ TEST_CASE("Softplus at huge beta*x stays finite, forward and backward") {
   for (std::uint32_t s = 0; s < batch; ++s) ones[s * mlp.output_stride()] = 1.f;
   gpu::Buffer<float> grad_out(ctx, std::span<const float>(ones), "grad out");
   gpu::Buffer<float> grad_in(ctx, std::uint64_t(mlp.input_stride()) * batch, "grad in");
-  Mlp::Workspace ws(mlp, batch);
-  gpu::Stream s(ctx);
-  mlp.forward(s, ws, input);
-  mlp.backward(s, ws, input, grad_out, grad_in, false);
-  s.submit_and_wait();
+  const Mlp::Workspace ws = training_pass(mlp, batch, input, grad_out, grad_in);
   std::vector<float> out(ws.output().size / 4);
   ws.output().buffer->read_bytes(0, out.data(), ws.output().size);
   for (float v : out) CHECK(std::isfinite(v));
