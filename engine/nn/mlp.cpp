@@ -12,26 +12,16 @@
 namespace nf::nn {
 namespace {
 
-constexpr std::uint32_t kWorkgroup = 64;
-// mlp_forward's blocks, preferred first: rows x samples per invocation. 32 accumulators fill the
-// vector registers of an AVX-512 host. On CPU devices (lavapipe) a uniform load costs a bounds
-// check and a branch, so each weight feeds two samples (8 x 4 or 16 x 2 spill; 8 x 2 measured 10 %
-// faster than 32 x 1 on the strand decoder); GPUs broadcast weights for free and want one sample
-// per invocation. Narrower blocks serve devices with a small uniform range.
-// NF_MLP_GPU_BLOCKS=1 takes the GPU blocks on any device, so that CI runs them.
-struct ForwardBlock {
-  std::uint32_t cols, samples;
-};
-constexpr ForwardBlock kCpuBlocks[] = {{8, 2}};
-constexpr ForwardBlock kGpuBlocks[] = {{32, 1}, {16, 1}, {8, 2}};
-// Input vec4 per mlp_forward dispatch: its body is unrolled, and compiling 16 x 32 vec4 already
-// takes lavapipe's LLVM 8 s (once per machine: Mesa caches it), twice that 40 s.
-constexpr std::uint32_t kInputChunk4 = 16;
-constexpr std::uint32_t kWeightWindow4 = 4096;  // mlp_forward's uniform weight window (64 KiB)
-// mlp_backward_weights: samples per partial sum (its rows stay in cache while a slab's blocks are
-// summed), and input vec4 per block (4 x 4 kWeightBlockK accumulators per lane).
-constexpr std::uint32_t kSlab = 512;
-constexpr std::uint32_t kWeightBlockK = 2;
+// mlp_forward: output rows per workgroup block (32 accumulators per lane, its c32s1 variant) and
+// samples per workgroup (a larger workgroup spreads the staging of its weights over more samples).
+constexpr std::uint32_t kForwardCols = 32;
+constexpr std::uint32_t kForwardWorkgroup = 256;
+// Input vec4 per mlp_forward dispatch at most: a 256-wide layer in one (its body is unrolled).
+constexpr std::uint32_t kMaxInputChunk4 = 64;
+// mlp_backward_weights: inputs per block (accumulators per lane, its COLS) and samples per slab at
+// most (a slab's block of inputs is staged in shared memory, 16 bytes per 4 inputs of a sample).
+constexpr std::uint32_t kWeightCols = 32;
+constexpr std::uint32_t kMaxSlab4 = 64;
 constexpr std::uint32_t kMaxInferenceChunk = 1u << 16;
 // Hidden activations and gradients are lane-interleaved in groups of this many samples
 // (shaders/include/nf_rows.glsl); tensors crossing the module's boundary stay sample-major.
@@ -39,100 +29,93 @@ constexpr std::uint32_t kRowGroup = 8;
 std::uint64_t interleaved_rows(std::uint64_t batch) { return (batch + kRowGroup - 1) / kRowGroup * kRowGroup; }
 
 struct ForwardPush {
-  std::uint32_t batch, out4, out_dim, row_first, rows;
+  std::uint32_t batch, out4, out_dim, blocks;
   float beta, omega;
   std::uint32_t has_bias, accumulate, w_base, stride4, x_first4, x_interleaved, y_interleaved;
 };
 struct ActivationBackwardPush {
   std::uint32_t count4, batch, out_dim, out4;
   float beta, omega;
-  std::uint32_t grad_z_interleaved, grad_y_interleaved, y_interleaved;
+  std::uint32_t grad_z_interleaved, grad_y_interleaved, y_interleaved, zt_stride;
 };
 struct TransposePush {
   std::uint32_t in_dim, in_stride, out_dim, out_stride, weight_offset;
 };
 struct BackwardWeightsPush {
-  std::uint32_t batch, in4, out4, out_dim, k_blocks, blocks, dz_interleaved, x_interleaved;
+  std::uint32_t batch, in4, out_dim, dzt_stride4, o_groups, i_blocks, groups, x_interleaved;
 };
 struct ReducePartialsPush {
-  std::uint32_t weights, biases, slabs, weight_offset, bias_offset, accumulate;
+  std::uint32_t weights, biases, slabs, weight_offset, bias_offset, accumulate, slab_stride;
 };
 
 std::uint64_t layer_parameters(const LayerShape& l) { return std::uint64_t(l.out) * l.in_stride + l.out; }
+// Floats between mlp_backward_weights' slab copies of a layer's gradient: whole vec4.
+std::uint64_t slab_stride(const LayerShape& l) { return std::uint64_t(l.out) * l.in_stride + (l.out + 3) / 4 * 4; }
 
 }  // namespace
 
 Mlp::Mlp(gpu::Context& context, const MlpConfig& config, const std::string& name)
-    : context_(context), config_(config), gpu_blocks_(gpu::use_gpu_layout(context, "NF_MLP_GPU_BLOCKS")) {
+    : context_(context), config_(config) {
   config_.validate();
   layers_ = config_.layers();
-  for (const LayerShape& l : layers_) {
-    block_for(l.in_stride);  // throws if the device's uniform buffers cannot hold a row block
-    block_for(l.out_stride);
-  }
+  if (forward_chunk4() == 0)
+    throw DeviceError("mlp: the device's " + std::to_string(context_.info().limits.max_compute_shared_memory) +
+                      " bytes of shared memory cannot hold a block of " + std::to_string(kForwardCols) +
+                      " weight rows");
   parameters_ = std::make_unique<gpu::Buffer<float>>(context, config_.parameter_count(), name + " parameters");
   gradients_ = std::make_unique<gpu::Buffer<float>>(context, config_.parameter_count(), name + " gradients");
   parameters_->fill_u32(0);
   gradients_->fill_u32(0);
 }
 
-std::uint64_t Mlp::weight_window4() const {
-  return std::min<std::uint64_t>(kWeightWindow4, context_.info().limits.max_uniform_buffer_range / 16);
+std::uint32_t Mlp::slab4() const {
+  return std::min(kMaxSlab4, context_.info().limits.max_compute_shared_memory / (16 * kWeightCols));
 }
 
-Mlp::Block Mlp::block_for(std::uint32_t in_stride) const {
-  // mlp_forward's weight window: COLS rows of in_stride floats plus 16 vec4 of alignment slack.
-  const std::uint64_t capacity = weight_window4();
-  const std::span<const ForwardBlock> blocks =
-      gpu_blocks_ ? std::span<const ForwardBlock>(kGpuBlocks) : std::span<const ForwardBlock>(kCpuBlocks);
-  for (const ForwardBlock& b : blocks)
-    if (std::uint64_t(b.cols) * (in_stride / 4) + 16 <= capacity) return {b.cols, b.samples};
-  throw DeviceError("mlp: a layer with " + std::to_string(in_stride) + " inputs needs more uniform-buffer range than "
-                    "the device's " + std::to_string(context_.info().limits.max_uniform_buffer_range) + " bytes");
+std::uint32_t Mlp::slabs(std::uint32_t batch) const {
+  return std::max<std::uint32_t>(1, (batch + 4 * slab4() - 1) / (4 * slab4()));
+}
+
+std::uint32_t Mlp::forward_chunk4() const {
+  // mlp_forward stages kForwardCols rows of the chunk's inputs (16 bytes per vec4) in shared memory.
+  return std::min(kMaxInputChunk4, context_.info().limits.max_compute_shared_memory / (16 * kForwardCols));
 }
 
 void Mlp::record_product(gpu::Stream& stream, const Product& p, gpu::BufferRange x, gpu::BufferRange y,
                          gpu::BufferRange z, std::uint32_t batch, Layouts layouts) const {
-  const Block block = block_for(p.in_stride);
-  const std::uint32_t cols = block.cols, in4 = p.in_stride / 4;
-  const std::string variant = "nn/mlp_forward:c" + std::to_string(cols) + "s" + std::to_string(block.samples);
-  const std::uint64_t align = std::max<std::uint64_t>(4, context_.info().limits.min_uniform_buffer_offset_alignment / 4);
-  const std::uint64_t buffer_floats = p.weights->bytes() / 4;
-  // Each group of kRowGroup invocations takes kRowGroup x samples neighbouring samples.
-  const std::uint64_t per_group = std::uint64_t(kRowGroup) * block.samples;
-  const std::uint64_t invocations = (std::uint64_t(batch) + per_group - 1) / per_group * kRowGroup;
-  for (std::uint32_t first = 0; first < p.out_dim; first += cols) {
-    const std::uint32_t rows = std::min(cols, p.out_dim - first);
-    for (std::uint32_t k4 = 0; k4 < in4; k4 += kInputChunk4) {
-      const std::uint32_t chunk4 = std::min(kInputChunk4, in4 - k4);
-      const bool first_chunk = k4 == 0, last_chunk = k4 + chunk4 == in4;
-      const bool store_z = last_chunk && z.size;
-      const gpu::Kernel& k = context_.kernel(
-          variant, {{0, kWorkgroup},
-                    {3, chunk4},
-                    {4, std::uint32_t(last_chunk ? p.activation.type : Activation::None)},
-                    {5, store_z ? 1u : 0u}});
-      // Bind from an aligned offset at or before the block; the shader skips the difference.
-      const std::uint64_t start = p.weight_offset + std::uint64_t(first) * p.in_stride + 4u * k4;
-      const std::uint64_t base = start / align * align;
-      const std::uint64_t window = std::min<std::uint64_t>(weight_window4() * 4, buffer_floats - base);
-      const ForwardPush push{batch,
-                             p.out_stride / 4,
-                             p.out_dim,
-                             first,
-                             rows,
-                             p.activation.beta,
-                             p.activation.omega,
-                             first_chunk && p.biases.size ? 1u : 0u,
-                             first_chunk ? 0u : 1u,
-                             std::uint32_t((start - base) / 4),
-                             in4,
-                             k4,
-                             layouts.x_interleaved,
-                             layouts.y_interleaved};
-      stream.dispatch(k, {y, store_z ? z : gpu::BufferRange{}, p.weights->range_bytes(base * 4, window * 4), p.biases, x},
-                      push, gpu::Elements(invocations));
-    }
+  const std::uint32_t in4 = p.in_stride / 4, most4 = forward_chunk4();
+  const std::uint32_t blocks = (p.out_dim + kForwardCols - 1) / kForwardCols;
+  const std::uint64_t tiles = (std::uint64_t(batch) + kForwardWorkgroup - 1) / kForwardWorkgroup;
+  // The weights as texels, bound from an aligned offset at or before row 0 (layers start on
+  // kLayerAlignment floats, so the difference is whole vec4).
+  const std::uint64_t align = std::max<std::uint64_t>(4, context_.info().limits.min_texel_buffer_offset_alignment / 4);
+  const std::uint64_t base = p.weight_offset / align * align;
+  const gpu::BufferRange w =
+      p.weights->range_bytes(base * 4, (p.weight_offset - base + std::uint64_t(p.out_dim) * p.in_stride) * 4);
+  for (std::uint32_t k4 = 0; k4 < in4; k4 += most4) {
+    const std::uint32_t chunk4 = std::min(most4, in4 - k4);
+    const bool first_chunk = k4 == 0, last_chunk = k4 + chunk4 == in4;
+    const bool store_z = last_chunk && z.size;
+    const gpu::Kernel& k = context_.kernel("nn/mlp_forward:c32s1",
+                                           {{0, kForwardWorkgroup},
+                                            {3, chunk4},
+                                            {4, std::uint32_t(last_chunk ? p.activation.type : Activation::None)},
+                                            {5, store_z ? 1u : 0u}});
+    const ForwardPush push{batch,
+                           p.out_stride / 4,
+                           p.out_dim,
+                           blocks,
+                           p.activation.beta,
+                           p.activation.omega,
+                           first_chunk && p.biases.size ? 1u : 0u,
+                           first_chunk ? 0u : 1u,
+                           std::uint32_t((p.weight_offset - base) / 4),
+                           in4,
+                           k4,
+                           layouts.x_interleaved,
+                           layouts.y_interleaved};
+    stream.dispatch(k, {y, store_z ? z : gpu::BufferRange{}, p.biases, x, w}, push,
+                    gpu::Elements(blocks * tiles * kForwardWorkgroup));
   }
 }
 
@@ -169,14 +152,22 @@ Mlp::Workspace::Workspace(const Mlp& mlp, std::uint32_t batch) : batch_(batch) {
   grad_a_ = std::make_unique<gpu::Buffer<float>>(ctx, std::uint64_t(widest) * rows, "mlp grad a");
   grad_b_ = std::make_unique<gpu::Buffer<float>>(ctx, std::uint64_t(widest) * rows, "mlp grad b");
   transposed_ = std::make_unique<gpu::Buffer<float>>(ctx, largest_transpose, "mlp transposed weights");
+  // The weight gradient's slab copies and the transposed output gradient, whole slabs long.
   std::uint64_t most = 0;
-  for (const LayerShape& l : mlp.layers_) most = std::max(most, layer_parameters(l));
-  const std::uint64_t slabs = std::max<std::uint64_t>(1, (std::uint64_t(batch) + kSlab - 1) / kSlab);
-  if (slabs * most * 4 > lim.max_storage_buffer_range)
-    throw InputError("mlp batch of " + std::to_string(batch) + " samples needs " + std::to_string(slabs * most * 4) +
-                     " bytes of per-slab weight-gradient partials, over the device's binding range; train with "
-                     "smaller batches");
+  std::uint32_t widest_out = 0;
+  for (const LayerShape& l : mlp.layers_) {
+    most = std::max(most, slab_stride(l));
+    widest_out = std::max(widest_out, l.out);
+  }
+  const std::uint64_t slabs = mlp.slabs(batch), padded = slabs * 4 * mlp.slab4();
+  if (slabs * most * 4 > lim.max_storage_buffer_range || widest_out * padded * 4 > lim.max_storage_buffer_range ||
+      widest_out * padded / 4 > lim.max_texel_buffer_elements)
+    throw InputError("mlp batch of " + std::to_string(batch) + " samples needs " +
+                     std::to_string(std::max(slabs * most, widest_out * padded) * 4) +
+                     " bytes of weight-gradient partials or transposed gradients, over the device's binding range; "
+                     "train with smaller batches");
   partials_ = std::make_unique<gpu::Buffer<float>>(ctx, slabs * most, "mlp partial grads");
+  grad_zt_ = std::make_unique<gpu::Buffer<float>>(ctx, widest_out * padded, "mlp transposed grad z");
 }
 
 void Mlp::forward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input) const {
@@ -204,7 +195,10 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
   if (grad_input.size) grad_input = gpu::sub_range(grad_input, 4, 0, std::uint64_t(batch) * input_stride());
   const gpu::Kernel& transpose = context_.kernel("nn/mlp_transpose", {{0, 256}});
   const gpu::Kernel& reduce = context_.kernel("nn/mlp_reduce_partials", {{0, 256}});
-  const std::uint32_t slabs = (batch + kSlab - 1) / kSlab;
+  const std::uint32_t slab_count = slabs(batch), zt_stride = slab_count * 4 * slab4();
+  const gpu::DeviceLimits& lim = context_.info().limits;
+  const std::uint32_t widest_group =
+      std::min({1024u, lim.max_workgroup_invocations, lim.max_workgroup_size[0]}) / 8 * 8;
   gpu::BufferRange grad_y = grad_output;
   gpu::Buffer<float>* buffers[2] = {ws.grad_a_.get(), ws.grad_b_.get()};
   for (std::size_t li = layers_.size(); li-- > 0;) {
@@ -215,22 +209,26 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
     const gpu::BufferRange z = ws.z_[li] ? ws.z_[li]->whole() : gpu::BufferRange{};
     const gpu::Kernel& act =
         context_.kernel("nn/mlp_activation_backward", {{0, 256}, {1, std::uint32_t(l.activation.type)}});
-    stream.dispatch(act, {dz, grad_y, ws.y_[li]->whole(), z},
+    const gpu::BufferRange dzt = ws.grad_zt_->range(0, std::uint64_t(l.out) * zt_stride);
+    stream.dispatch(act, {dz, dzt, grad_y, ws.y_[li]->whole(), z},
                     ActivationBackwardPush{std::uint32_t(count / 4), batch, l.out, l.out_stride / 4, l.activation.beta,
-                                           l.activation.omega, 1u, last ? 0u : 1u, last ? 0u : 1u},
+                                           l.activation.omega, 1u, last ? 0u : 1u, last ? 0u : 1u, zt_stride},
                     gpu::Elements(count / 4));
     const gpu::BufferRange x = li == 0 ? input : ws.y_[li - 1]->whole();
-    const gpu::Kernel& weights =
-        context_.kernel("nn/mlp_backward_weights", {{0, kWorkgroup}, {1, kSlab}, {2, kWeightBlockK}});
-    const std::uint32_t k_blocks = (l.in_stride / 4 + 1 + kWeightBlockK - 1) / kWeightBlockK;
-    const std::uint32_t blocks = slabs * k_blocks * (l.out_stride / 4);
-    stream.dispatch(weights, {ws.partials_->whole(), dz, x},
-                    BackwardWeightsPush{batch, l.in_stride / 4, l.out_stride / 4, l.out, k_blocks, blocks, 1u,
+    // One lane per output: as few workgroups across the outputs as the device allows, evened out.
+    const std::uint32_t o_groups = (l.out + widest_group - 1) / widest_group;
+    const std::uint32_t group_size = ((l.out + o_groups - 1) / o_groups + 7) / 8 * 8;
+    const gpu::Kernel& weights = context_.kernel("nn/mlp_backward_weights", {{0, group_size}, {1, slab4()}});
+    const std::uint32_t i_blocks = (l.in_stride + kWeightCols - 1) / kWeightCols;
+    const std::uint32_t groups = o_groups * i_blocks * slab_count;
+    stream.dispatch(weights, {ws.partials_->whole(), dzt, x},
+                    BackwardWeightsPush{batch, l.in_stride / 4, l.out, zt_stride / 4, o_groups, i_blocks, groups,
                                         li > 0 ? 1u : 0u},
-                    gpu::Elements(blocks));
+                    gpu::Elements(std::uint64_t(groups) * group_size));
     stream.dispatch(reduce, {ws.partials_->whole(), gradients_->whole()},
-                    ReducePartialsPush{l.out * l.in_stride, l.out, slabs, std::uint32_t(l.weight_offset),
-                                       std::uint32_t(l.bias_offset), accumulate ? 1u : 0u},
+                    ReducePartialsPush{l.out * l.in_stride, l.out, slab_count, std::uint32_t(l.weight_offset),
+                                       std::uint32_t(l.bias_offset), accumulate ? 1u : 0u,
+                                       std::uint32_t(slab_stride(l))},
                     gpu::Elements(layer_parameters(l)));
     if (li == 0 && grad_input.size == 0) break;
     // dx = W^T dz: the forward kernel on the transposed weights.

@@ -38,7 +38,7 @@ class Mlp {
     friend class Mlp;
     std::uint32_t batch_;
     std::vector<std::unique_ptr<gpu::Buffer<float>>> y_, z_;  // per layer; z_ only for Sine layers
-    std::unique_ptr<gpu::Buffer<float>> grad_a_, grad_b_, partials_, transposed_;
+    std::unique_ptr<gpu::Buffer<float>> grad_a_, grad_b_, grad_zt_, partials_, transposed_;
   };
 
   // Records the training forward of `input` ([batch][input_stride]) into the workspace.
@@ -75,18 +75,15 @@ class Mlp {
                       gpu::BufferRange z, std::uint32_t batch, Layouts layouts) const;
   void record_layer_forward(gpu::Stream& stream, const LayerShape& layer, gpu::BufferRange x, gpu::BufferRange y,
                             gpu::BufferRange z, std::uint32_t batch, Layouts layouts) const;
-  // mlp_forward's block (output rows x samples per invocation) for inputs of this stride: the
-  // device kind's preferred one that fits its uniform buffers.
-  struct Block {
-    std::uint32_t cols, samples;
-  };
-  Block block_for(std::uint32_t in_stride) const;
-  // vec4 in mlp_forward's uniform weight window on this device.
-  std::uint64_t weight_window4() const;
+  // Input vec4 per mlp_forward dispatch on this device (its weight block fills shared memory).
+  std::uint32_t forward_chunk4() const;
+  // mlp_backward_weights' samples per slab / 4 on this device (its input block fills shared
+  // memory), and the slabs of a batch.
+  std::uint32_t slab4() const;
+  std::uint32_t slabs(std::uint32_t batch) const;
 
   gpu::Context& context_;
   MlpConfig config_;
-  bool gpu_blocks_;  // mlp_forward's GPU blocks (on GPUs, or NF_MLP_GPU_BLOCKS=1)
   std::vector<LayerShape> layers_;
   std::unique_ptr<gpu::Buffer<float>> parameters_, gradients_;
 };

@@ -3,7 +3,8 @@
 #extension GL_EXT_control_flow_attributes : require
 // dL/dz = dL/dy * act'(z) for one layer, elementwise over [batch][out_stride], four values per
 // invocation in grad_z's layout (nf_rows.glsl; the others may be laid out otherwise); padding
-// columns and padding samples get zero. grad_y and grad_z may be the same range only when laid
+// columns and padding samples get zero. A second copy, transposed ([out][zt_stride], the batch's
+// samples contiguous), feeds the weight gradient (mlp_backward_weights.comp). grad_y and grad_z may be the same range only when laid
 // out alike (each value is then read before its invocation writes it). Reads are texel fetches (straight-line gathers on
 // lavapipe, where storage-buffer loads loop over the lanes) and the activation is a
 // specialisation constant (lavapipe evaluates both sides of a branch).
@@ -16,6 +17,7 @@ layout(local_size_x_id = 0) in;
 #include "nf_rows.glsl"
 
 layout(std430, binding = 0) writeonly buffer GradZ { vec4 grad_z[]; };
+layout(std430, binding = 1) writeonly buffer GradZT { float grad_zt[]; };
 layout(binding = 16) uniform samplerBuffer grad_y;
 layout(binding = 17) uniform samplerBuffer y;  // the layer's output (ReLU, Softplus)
 layout(binding = 18) uniform samplerBuffer z;  // its pre-activation (Sine)
@@ -30,6 +32,7 @@ layout(push_constant) uniform Push {
   uint grad_z_interleaved;  // nf_rows.glsl layouts
   uint grad_y_interleaved;
   uint y_interleaved;       // of y and z
+  uint zt_stride;           // floats per row of grad_zt
 } pc;
 
 void main() {
@@ -55,4 +58,8 @@ void main() {
   vec4 out_grad;
   [[unroll]] for (uint e = 0u; e < 4u; ++e) out_grad[e] = column + e < pc.out_dim && s < pc.batch ? g[e] * d[e] : 0.0;
   grad_z[i] = out_grad;
+  if (s < pc.batch) {
+    [[unroll]] for (uint e = 0u; e < 4u; ++e)
+      if (column + e < pc.out_dim) grad_zt[(column + e) * pc.zt_stride + s] = out_grad[e];
+  }
 }

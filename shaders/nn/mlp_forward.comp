@@ -1,28 +1,27 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
-// One MLP layer for a block of COLS output rows: y = act(W x + b), for SAMPLES samples per
-// invocation, reading four features at a time; COLS x SAMPLES outputs stay in registers. Weights
-// and biases sit in uniform buffers that every lane reads at the same offset. The body is
-// straight-line code on purpose: lavapipe (Mesa 22.3) loads a value once and broadcasts it only
-// when its offset is built from constants and push constants *and* the load sits outside any loop,
-// branch or early return; anywhere else every lane loads on its own. Even then each weight load
-// costs a bounds check and a branch, so on CPU devices every weight feeds two samples (c8s2: more
-// accumulators would spill); GPUs broadcast uniform loads anyway and take one sample per
-// invocation (c32s1). Inputs come by texel fetch, a straight-line gather, where a storage-buffer
-// load loops over the lanes. The input loop is unrolled (IN4 is a specialisation constant), the
-// tail lanes are clamped instead of returning, and only the stores are conditional. LLVM's compile
-// time grows faster than the body (8 s for 2048 multiply-adds, 40 s for twice that), so a dispatch
-// covers a chunk of at most 16 input vec4 and later chunks add to y; the bias enters with the
-// first chunk, the activation with the last (a specialisation constant: lavapipe evaluates both
-// sides of a branch, so a run-time switch would evaluate every activation).
-// The same kernel computes the input adjoint dx = W^T dz, on transposed weights. One dispatch per
-// block of COLS rows and input chunk. Layout: engine/nn/mlp_config.hpp. Host: engine/nn/mlp.cpp.
-//! variant c8s2 -DCOLS=8 -DSAMPLES=2
-//! variant c16s1 -DCOLS=16 -DSAMPLES=1
+// One MLP layer, y = act(W x + b), for a block of COLS output rows and WG x SAMPLES samples per
+// workgroup, reading IN4 input vec4 (a chunk of the layer's inputs) per dispatch; COLS x SAMPLES
+// outputs stay in registers. One dispatch covers every row block of the layer: workgroups take the
+// row blocks of one sample tile in turn, so a tile's inputs are read from memory once and from
+// cache by the other blocks.
+//
+// The workgroup first stages its block of weights in shared memory. After the barrier every
+// weight is read at a constant offset, outside any loop or branch: that is the one load lavapipe
+// (Mesa 22.3) turns into a single broadcast, with no bounds check (a uniform-buffer load pays a
+// compare and a branch per component; anywhere inside control flow, every lane loads on its own).
+// Without those branches LLVM compiles a whole 256-input layer (8192 multiply-adds per lane) in
+// about a second. GPUs read broadcast shared values at full rate too. Inputs come by texel fetch,
+// a straight-line gather, where a storage-buffer load loops over the lanes. The tail lanes are
+// clamped instead of returning (a barrier needs every invocation), and only the stores are
+// conditional. Later chunks of a wider layer add to y; the bias enters with the first chunk, the
+// activation with the last (a specialisation constant: lavapipe evaluates both sides of a branch).
+// The same kernel computes the input adjoint dx = W^T dz, on transposed weights.
+// Layout: engine/nn/mlp_config.hpp. Host: engine/nn/mlp.cpp.
 //! variant c32s1 -DCOLS=32 -DSAMPLES=1
 
-layout(constant_id = 0) const uint WG = 64;
+layout(constant_id = 0) const uint WG = 256;
 layout(constant_id = 3) const uint IN4 = 1;         // input vec4 in this dispatch's chunk
 layout(constant_id = 4) const uint ACTIVATION = 0;  // NF_ACT_*: NONE but on a layer's last chunk
 layout(constant_id = 5) const bool STORE_Z = false;  // keep pre-activations (Sine layers in training)
@@ -33,33 +32,41 @@ layout(local_size_x_id = 0) in;
 
 layout(std430, binding = 0) buffer Output { vec4 y[]; };                   // [batch][out4]: nf_rows.glsl
 layout(std430, binding = 1) writeonly buffer PreActivation { vec4 z[]; };  // when STORE_Z
-// This dispatch's rows, stride4 vec4 apart, from vec4 w_base on: the binding starts at an offset
-// the device accepts and w_base covers the rest; it spans up to 64 KiB (less where the device's
-// uniform range or the buffer ends sooner).
-layout(std140, binding = 12) uniform Weights { vec4 w[4096]; };
-layout(std140, binding = 13) uniform Biases { vec4 b4[256]; };  // the layer's biases
-layout(binding = 16) uniform samplerBuffer x;                   // [batch][x_stride4]: nf_rows.glsl
+layout(std140, binding = 12) uniform Biases { vec4 b4[256]; };             // the layer's biases
+layout(binding = 16) uniform samplerBuffer x;  // [batch][stride4]: nf_rows.glsl
+layout(binding = 17) uniform samplerBuffer w;  // [out_dim][stride4] from vec4 w_base on
 
 layout(push_constant) uniform Push {
   uint batch;
-  uint out4;       // output row length in vec4
+  uint out4;  // output row length in vec4
   uint out_dim;
-  uint row_first;  // first output row of this dispatch (a multiple of 4)
-  uint rows;       // rows in this dispatch (<= COLS)
+  uint blocks;  // row blocks of COLS rows: workgroup g takes block g % blocks of tile g / blocks
   float beta;
   float omega;
   uint has_bias;
   uint accumulate;  // add the earlier chunks' sums
-  uint w_base;      // first vec4 of this dispatch's block in the weights binding
+  uint w_base;      // vec4 of the weights binding where row 0 starts
   uint stride4;     // vec4 per input row: between rows of x and between weight rows
   uint x_first4;    // first input vec4 of this chunk
   uint x_interleaved;  // nf_rows.glsl layouts of x and of y (and z)
   uint y_interleaved;
 } pc;
 
+shared vec4 w_block[COLS * IN4];  // this workgroup's rows of the chunk, row-major
+
 void main() {
+  const uint group = nf_linear_group();
+  const uint row_first = (group % pc.blocks) * COLS, tile = group / pc.blocks;
+  const uint last_row = pc.out_dim - 1u;
+
+  for (uint i = gl_LocalInvocationID.x; i < COLS * IN4; i += WG) {
+    const uint c = i / IN4, k4 = i - c * IN4;
+    w_block[i] = texelFetch(w, int(pc.w_base + min(row_first + c, last_row) * pc.stride4 + pc.x_first4 + k4));
+  }
+  barrier();
+
   // Eight neighbouring invocations take eight neighbouring samples, SAMPLES times.
-  const uint index = nf_linear_index();
+  const uint index = tile * WG + gl_LocalInvocationID.x;
   const uint first_sample = (index / NF_ROW_GROUP) * NF_ROW_GROUP * SAMPLES + index % NF_ROW_GROUP;
   uint s[SAMPLES];  // this invocation's samples, clamped into the batch for reading
   [[unroll]] for (uint t = 0u; t < SAMPLES; ++t) s[t] = min(first_sample + NF_ROW_GROUP * t, pc.batch - 1u);
@@ -68,7 +75,7 @@ void main() {
   float acc[SAMPLES][COLS];
   [[unroll]] for (uint c = 0u; c < COLS; ++c) {
     // Without biases the binding is a small placeholder: read its first entry (and discard it).
-    const uint o = pc.has_bias != 0u ? min(pc.row_first + c, pc.out_dim - 1u) : 0u;
+    const uint o = pc.has_bias != 0u ? min(row_first + c, last_row) : 0u;
     const float bias = pc.has_bias != 0u ? b4[o >> 2][o & 3u] : 0.0;
     [[unroll]] for (uint t = 0u; t < SAMPLES; ++t) acc[t][c] = bias;
   }
@@ -76,19 +83,19 @@ void main() {
     vec4 xv[SAMPLES];
     [[unroll]] for (uint t = 0u; t < SAMPLES; ++t) xv[t] = texelFetch(x, int(nf_row_index(s[t], pc.x_first4 + k4, pc.stride4, x_interleaved)));
     [[unroll]] for (uint c = 0u; c < COLS; ++c) {
-      const vec4 wv = w[pc.w_base + min(c, pc.rows - 1u) * pc.stride4 + k4];
+      const vec4 wv = w_block[c * IN4 + k4];
       [[unroll]] for (uint t = 0u; t < SAMPLES; ++t)
         acc[t][c] = fma(xv[t].x, wv.x, fma(xv[t].y, wv.y, fma(xv[t].z, wv.z, fma(xv[t].w, wv.w, acc[t][c]))));
     }
   }
+  const uint rows = min(COLS, pc.out_dim - row_first);
   [[unroll]] for (uint t = 0u; t < SAMPLES; ++t) {
     [[unroll]] for (uint j = 0u; j < COLS / 4u; ++j) {
-      const uint o = pc.row_first + 4u * j;
+      const uint o = row_first + 4u * j;
       const uint i = nf_row_index(s[t], min(o, 4u * pc.out4 - 4u) / 4u, pc.out4, y_interleaved);
       vec4 pre = vec4(acc[t][4u * j], acc[t][4u * j + 1u], acc[t][4u * j + 2u], acc[t][4u * j + 3u]);
-      if (4u * j < pc.rows && first_sample + NF_ROW_GROUP * t < pc.batch) {
-        // The earlier chunks' sums, by storage load under the branch: the first chunk skips it
-        // entirely, where a texel fetch would read for every chunk (the two measured the same).
+      if (4u * j < rows && first_sample + NF_ROW_GROUP * t < pc.batch) {
+        // The earlier chunks' sums, by storage load under the branch: the first chunk skips it.
         if (pc.accumulate != 0u) pre += y[i];
         vec4 post;
         [[unroll]] for (uint e = 0u; e < 4u; ++e) {
