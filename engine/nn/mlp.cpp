@@ -34,9 +34,9 @@ struct ForwardPush {
   std::uint32_t has_bias, accumulate, w_base, stride4, x_first4, x_interleaved, y_interleaved;
 };
 struct ActivationBackwardPush {
-  std::uint32_t count4, batch, out_dim, out4;
+  std::uint32_t quads, batch, out_dim, out4;
   float beta, omega;
-  std::uint32_t grad_z_interleaved, grad_y_interleaved, y_interleaved, zt_stride;
+  std::uint32_t grad_z_interleaved, grad_y_interleaved, y_interleaved, zt_stride4;
 };
 struct TransposePush {
   std::uint32_t in_dim, in_stride, out_dim, out_stride, weight_offset;
@@ -211,9 +211,10 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
         context_.kernel("nn/mlp_activation_backward", {{0, 256}, {1, std::uint32_t(l.activation.type)}});
     const gpu::BufferRange dzt = ws.grad_zt_->range(0, std::uint64_t(l.out) * zt_stride);
     stream.dispatch(act, {dz, dzt, grad_y, ws.y_[li]->whole(), z},
-                    ActivationBackwardPush{std::uint32_t(count / 4), batch, l.out, l.out_stride / 4, l.activation.beta,
-                                           l.activation.omega, 1u, last ? 0u : 1u, last ? 0u : 1u, zt_stride},
-                    gpu::Elements(count / 4));
+                    ActivationBackwardPush{std::uint32_t(interleaved_rows(batch) / 4), batch, l.out, l.out_stride / 4,
+                                           l.activation.beta, l.activation.omega, 1u, last ? 0u : 1u, last ? 0u : 1u,
+                                           zt_stride / 4},
+                    gpu::Elements(count / 16));
     const gpu::BufferRange x = li == 0 ? input : ws.y_[li - 1]->whole();
     // One lane per output: as few workgroups across the outputs as the device allows, evened out.
     const std::uint32_t o_groups = (l.out + widest_group - 1) / widest_group;
