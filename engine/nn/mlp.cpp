@@ -1,8 +1,6 @@
 #include "engine/nn/mlp.hpp"
 
 #include <algorithm>
-#include <numeric>
-#include <span>
 
 #include "engine/core/error.hpp"
 #include "engine/gpu/chunking.hpp"
@@ -22,6 +20,9 @@ constexpr std::uint32_t kMaxInputChunk4 = 64;
 // most (a slab's block of inputs is staged in shared memory, 16 bytes per 4 inputs of a sample).
 constexpr std::uint32_t kWeightCols = 32;
 constexpr std::uint32_t kMaxSlab4 = 64;
+// Outputs (lanes) per mlp_backward_weights workgroup at most: enough to spread the staging of a
+// slab (4 % of the work at 256), few enough for any GPU.
+constexpr std::uint32_t kMaxWeightGroup = 256;
 constexpr std::uint32_t kMaxInferenceChunk = 1u << 16;
 // Hidden activations and gradients are lane-interleaved in groups of this many samples
 // (shaders/include/nf_rows.glsl); tensors crossing the module's boundary stay sample-major.
@@ -198,7 +199,7 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
   const std::uint32_t slab_count = slabs(batch), zt_stride = slab_count * 4 * slab4();
   const gpu::DeviceLimits& lim = context_.info().limits;
   const std::uint32_t widest_group =
-      std::min({1024u, lim.max_workgroup_invocations, lim.max_workgroup_size[0]}) / 8 * 8;
+      std::min({kMaxWeightGroup, lim.max_workgroup_invocations, lim.max_workgroup_size[0]}) / 8 * 8;
   gpu::BufferRange grad_y = grad_output;
   gpu::Buffer<float>* buffers[2] = {ws.grad_a_.get(), ws.grad_b_.get()};
   for (std::size_t li = layers_.size(); li-- > 0;) {

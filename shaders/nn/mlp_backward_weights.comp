@@ -48,13 +48,12 @@ void main() {
   const uint slab = group / (pc.o_groups * pc.i_blocks);
   const uint first = slab * SLAB, k4_first = ib * (COLS / 4u);
 
-  // Samples past the batch and inputs past the row stage zeros.
+  // Samples past the batch and inputs past the row stage clamped copies: their dz is selected away
+  // below, and their sums are not stored.
   for (uint t = gl_LocalInvocationID.x; t < COLS / 4u * SLAB; t += WG) {
     const uint c4 = t % (COLS / 4u), s = t / (COLS / 4u);
-    const uint at = first + s, k4 = k4_first + c4;
-    const vec4 v = texelFetch(x, int(nf_row_index(min(at, pc.batch - 1u), min(k4, pc.in4 - 1u), pc.in4,
-                                                  pc.x_interleaved != 0u)));
-    xs[c4 * SLAB + s] = at < pc.batch && k4 < pc.in4 ? v : vec4(0.0);
+    const uint at = min(first + s, pc.batch - 1u), k4 = min(k4_first + c4, pc.in4 - 1u);
+    xs[c4 * SLAB + s] = texelFetch(x, int(nf_row_index(at, k4, pc.in4, pc.x_interleaved != 0u)));
   }
   barrier();
 

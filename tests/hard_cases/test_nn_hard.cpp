@@ -86,15 +86,16 @@ TEST_CASE("an MLP handles empty batches and batches of any size") {
   }
 }
 
-// The weight gradient sums per slab of samples, then over slabs, in blocks of 4 outputs x 8
-// inputs; the layer kernel takes two samples per invocation on CPU devices and one on GPUs (the
-// _gpu_blocks entry). Widths that are not multiples of a block, inputs wider than one chunk, and
-// an odd batch with a short last slab check every edge against the double-precision reference.
+// The layer kernel works in blocks of 32 output rows and at most 64 input vec4 per dispatch; the
+// weight gradient in workgroups of at most 256 outputs x 32 inputs x one slab of 256 samples, then
+// sums the slabs. Widths that are not multiples of a block, a layer wider than one chunk and than
+// one workgroup of outputs, and an odd batch with a short last slab check every edge against the
+// double-precision reference.
 TEST_CASE("MLP gradients over several slabs and odd widths match the reference") {
   auto& ctx = test::context();
   MlpConfig c;
-  c.input_dim = 70;
-  c.hidden = {70, 36};  // 72 inputs per layer: two chunks of mlp_forward
+  c.input_dim = 300;    // 75 input vec4: two chunks of mlp_forward; 10 input blocks, the last short
+  c.hidden = {270, 36};  // 270 outputs: two weight-gradient workgroups; its input adjoint: 9 row blocks
   c.output_dim = 5;
   c.hidden_activation = {Activation::Softplus, 2.f, 30.f};
   Mlp mlp(ctx, c);
@@ -106,7 +107,7 @@ TEST_CASE("MLP gradients over several slabs and odd widths match the reference")
       for (std::uint32_t k = 0; k < l.in; ++k) params[l.weight_offset + o * l.in_stride + k] = u(rng);
       params[l.bias_offset + o] = u(rng);
     }
-  const std::uint32_t batch = 9001;  // 18 slabs, the last short; odd: a lone sample in its invocation
+  const std::uint32_t batch = 9001;  // 36 slabs, the last short; odd: a lone sample in its group of 8
   std::vector<double> in(std::size_t(mlp.input_stride()) * batch, 0.0);
   std::vector<double> grad_out(std::size_t(mlp.output_stride()) * batch, 0.0);
   for (std::uint32_t s = 0; s < batch; ++s) {
