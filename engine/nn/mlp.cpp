@@ -11,9 +11,10 @@ namespace nf::nn {
 namespace {
 
 // mlp_forward: output rows per workgroup block (32 accumulators per lane, its c32s1 variant) and
-// samples per workgroup (a larger workgroup spreads the staging of its weights over more samples).
+// samples per workgroup at most (a larger workgroup spreads the staging of its weights over more
+// samples; 512 measured the same as 256 on lavapipe).
 constexpr std::uint32_t kForwardCols = 32;
-constexpr std::uint32_t kForwardWorkgroup = 256;
+constexpr std::uint32_t kMaxForwardGroup = 256;
 // Input vec4 per mlp_forward dispatch at most: a 256-wide layer in one (its body is unrolled).
 constexpr std::uint32_t kMaxInputChunk4 = 64;
 // mlp_backward_weights: inputs per block (accumulators per lane, its COLS) and samples per slab at
@@ -46,10 +47,9 @@ struct BackwardWeightsPush {
   std::uint32_t batch, in4, out_dim, dzt_stride4, o_groups, i_blocks, groups, x_interleaved;
 };
 struct ReducePartialsPush {
-  std::uint32_t weights, biases, slabs, weight_offset, bias_offset, accumulate, slab_stride;
+  std::uint32_t weights, biases, slabs, weight_offset, bias_offset, accumulate, slab_stride4;
 };
 
-std::uint64_t layer_parameters(const LayerShape& l) { return std::uint64_t(l.out) * l.in_stride + l.out; }
 // Floats between mlp_backward_weights' slab copies of a layer's gradient: whole vec4.
 std::uint64_t slab_stride(const LayerShape& l) { return std::uint64_t(l.out) * l.in_stride + (l.out + 3) / 4 * 4; }
 
@@ -69,6 +69,13 @@ Mlp::Mlp(gpu::Context& context, const MlpConfig& config, const std::string& name
   gradients_->fill_u32(0);
 }
 
+std::uint32_t Mlp::workgroup_limit(std::uint32_t most) const {
+  // Whole groups of kRowGroup lanes (the interleaved layout's sample groups).
+  const gpu::DeviceLimits& lim = context_.info().limits;
+  const std::uint32_t limit = std::min({most, lim.max_workgroup_invocations, lim.max_workgroup_size[0]});
+  return std::max(kRowGroup, limit / kRowGroup * kRowGroup);
+}
+
 std::uint32_t Mlp::slab4() const {
   return std::min(kMaxSlab4, context_.info().limits.max_compute_shared_memory / (16 * kWeightCols));
 }
@@ -86,7 +93,8 @@ void Mlp::record_product(gpu::Stream& stream, const Product& p, gpu::BufferRange
                          gpu::BufferRange z, std::uint32_t batch, Layouts layouts) const {
   const std::uint32_t in4 = p.in_stride / 4, most4 = forward_chunk4();
   const std::uint32_t blocks = (p.out_dim + kForwardCols - 1) / kForwardCols;
-  const std::uint64_t tiles = (std::uint64_t(batch) + kForwardWorkgroup - 1) / kForwardWorkgroup;
+  const std::uint32_t group_size = workgroup_limit(kMaxForwardGroup);
+  const std::uint64_t tiles = (std::uint64_t(batch) + group_size - 1) / group_size;
   // The weights as texels, bound from an aligned offset at or before row 0 (layers start on
   // kLayerAlignment floats, so the difference is whole vec4).
   const std::uint64_t align = std::max<std::uint64_t>(4, context_.info().limits.min_texel_buffer_offset_alignment / 4);
@@ -98,7 +106,7 @@ void Mlp::record_product(gpu::Stream& stream, const Product& p, gpu::BufferRange
     const bool first_chunk = k4 == 0, last_chunk = k4 + chunk4 == in4;
     const bool store_z = last_chunk && z.size;
     const gpu::Kernel& k = context_.kernel("nn/mlp_forward:c32s1",
-                                           {{0, kForwardWorkgroup},
+                                           {{0, group_size},
                                             {3, chunk4},
                                             {4, std::uint32_t(last_chunk ? p.activation.type : Activation::None)},
                                             {5, store_z ? 1u : 0u}});
@@ -116,7 +124,7 @@ void Mlp::record_product(gpu::Stream& stream, const Product& p, gpu::BufferRange
                            layouts.x_interleaved,
                            layouts.y_interleaved};
     stream.dispatch(k, {y, store_z ? z : gpu::BufferRange{}, p.biases, x, w}, push,
-                    gpu::Elements(blocks * tiles * kForwardWorkgroup));
+                    gpu::Elements(blocks * tiles * group_size));
   }
 }
 
@@ -161,8 +169,8 @@ Mlp::Workspace::Workspace(const Mlp& mlp, std::uint32_t batch) : batch_(batch) {
     widest_out = std::max(widest_out, l.out);
   }
   const std::uint64_t slabs = mlp.slabs(batch), padded = slabs * 4 * mlp.slab4();
-  if (slabs * most * 4 > lim.max_storage_buffer_range || widest_out * padded * 4 > lim.max_storage_buffer_range ||
-      widest_out * padded / 4 > lim.max_texel_buffer_elements)
+  if (slabs * most * 4 > lim.max_storage_buffer_range || slabs * most / 4 > lim.max_texel_buffer_elements ||
+      widest_out * padded * 4 > lim.max_storage_buffer_range || widest_out * padded / 4 > lim.max_texel_buffer_elements)
     throw InputError("mlp batch of " + std::to_string(batch) + " samples needs " +
                      std::to_string(std::max(slabs * most, widest_out * padded) * 4) +
                      " bytes of weight-gradient partials or transposed gradients, over the device's binding range; "
@@ -197,9 +205,7 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
   const gpu::Kernel& transpose = context_.kernel("nn/mlp_transpose", {{0, 256}});
   const gpu::Kernel& reduce = context_.kernel("nn/mlp_reduce_partials", {{0, 256}});
   const std::uint32_t slab_count = slabs(batch), zt_stride = slab_count * 4 * slab4();
-  const gpu::DeviceLimits& lim = context_.info().limits;
-  const std::uint32_t widest_group =
-      std::min({kMaxWeightGroup, lim.max_workgroup_invocations, lim.max_workgroup_size[0]}) / 8 * 8;
+  const std::uint32_t widest_group = workgroup_limit(kMaxWeightGroup);
   gpu::BufferRange grad_y = grad_output;
   gpu::Buffer<float>* buffers[2] = {ws.grad_a_.get(), ws.grad_b_.get()};
   for (std::size_t li = layers_.size(); li-- > 0;) {
@@ -227,11 +233,11 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
                     BackwardWeightsPush{batch, l.in_stride / 4, l.out, zt_stride / 4, o_groups, i_blocks, groups,
                                         li > 0 ? 1u : 0u},
                     gpu::Elements(std::uint64_t(groups) * group_size));
-    stream.dispatch(reduce, {ws.partials_->whole(), gradients_->whole()},
+    stream.dispatch(reduce, {gradients_->whole(), ws.partials_->range(0, slab_count * slab_stride(l))},
                     ReducePartialsPush{l.out * l.in_stride, l.out, slab_count, std::uint32_t(l.weight_offset),
                                        std::uint32_t(l.bias_offset), accumulate ? 1u : 0u,
-                                       std::uint32_t(slab_stride(l))},
-                    gpu::Elements(layer_parameters(l)));
+                                       std::uint32_t(slab_stride(l) / 4)},
+                    gpu::Elements(slab_stride(l) / 4));
     if (li == 0 && grad_input.size == 0) break;
     // dx = W^T dz: the forward kernel on the transposed weights.
     const std::uint64_t transposed = std::uint64_t(l.in) * l.out_stride;

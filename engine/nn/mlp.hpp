@@ -81,6 +81,8 @@ class Mlp {
   // memory), and the slabs of a batch.
   std::uint32_t slab4() const;
   std::uint32_t slabs(std::uint32_t batch) const;
+  // The device's workgroup size limit, capped at `most`, in whole groups of 8 lanes.
+  std::uint32_t workgroup_limit(std::uint32_t most) const;
 
   gpu::Context& context_;
   MlpConfig config_;
