@@ -142,6 +142,13 @@ ContextOptions ContextOptions::from_env() {
   o.force_descriptor_pool = env_flag("NF_NO_PUSH_DESCRIPTORS");
   o.force_staging = env_flag("NF_FORCE_STAGING");
   o.no_shared_float_atomics = env_flag("NF_NO_SHARED_FLOAT_ATOMICS");
+  if (const char* v = std::getenv("NF_SHARED_MEMORY"); v && *v) {
+    char* end = nullptr;
+    const unsigned long bytes = std::strtoul(v, &end, 10);
+    if (*end != '\0' || bytes < 16384 || bytes > (1ul << 30))
+      throw InputError(std::string("NF_SHARED_MEMORY is '") + v + "'; it must be a byte count of at least 16384");
+    o.shared_memory_cap = std::uint32_t(bytes);
+  }
   return o;
 }
 

@@ -21,6 +21,7 @@ struct ContextOptions {
   bool force_descriptor_pool = false;  // NF_NO_PUSH_DESCRIPTORS=1: exercise the fallback path
   bool force_staging = false;          // NF_FORCE_STAGING=1: no mapped device memory, copy via staging
   bool no_shared_float_atomics = false;  // NF_NO_SHARED_FLOAT_ATOMICS=1: as if the device lacked them
+  std::uint32_t shared_memory_cap = 0;   // NF_SHARED_MEMORY=<bytes>: report at most this much shared memory
   static ContextOptions from_env();
 };
 

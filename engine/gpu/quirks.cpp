@@ -50,6 +50,11 @@ void apply_quirks(DeviceInfo& info, DeviceTuning& tuning, const ContextOptions& 
     info.features.float32_atomic_add_shared = false;  // not enabled on the device either
     info.quirks.emplace_back("NF_NO_SHARED_FLOAT_ATOMICS: shared-memory float atomics off");
   }
+  // Kernels size their tiles from this limit; a cap lets CI run the sizes of small-memory GPUs.
+  if (options.shared_memory_cap && options.shared_memory_cap < info.limits.max_compute_shared_memory) {
+    info.limits.max_compute_shared_memory = options.shared_memory_cap;
+    info.quirks.emplace_back("NF_SHARED_MEMORY: " + std::to_string(options.shared_memory_cap) + " bytes of shared memory");
+  }
 }
 
 }  // namespace nf::gpu

@@ -63,6 +63,16 @@ Mlp::Mlp(gpu::Context& context, const MlpConfig& config, const std::string& name
     throw DeviceError("mlp: the device's " + std::to_string(context_.info().limits.max_compute_shared_memory) +
                       " bytes of shared memory cannot hold a block of " + std::to_string(kForwardCols) +
                       " weight rows");
+  // mlp_forward reads a layer's weights, and the input adjoint their transpose, as one texel view.
+  const std::uint64_t texels = context_.info().limits.max_texel_buffer_elements;
+  for (std::size_t li = 0; li < layers_.size(); ++li) {
+    const LayerShape& l = layers_[li];
+    const std::uint64_t needed = std::max(std::uint64_t(l.out) * l.in_stride, std::uint64_t(l.in) * l.out_stride) / 4;
+    if (needed > texels)
+      throw DeviceError("mlp layer " + std::to_string(li) + " (" + std::to_string(l.in) + " -> " +
+                        std::to_string(l.out) + ") needs " + std::to_string(needed) +
+                        " texels of weights, more than the device's maxTexelBufferElements " + std::to_string(texels));
+  }
   parameters_ = std::make_unique<gpu::Buffer<float>>(context, config_.parameter_count(), name + " parameters");
   gradients_ = std::make_unique<gpu::Buffer<float>>(context, config_.parameter_count(), name + " gradients");
   parameters_->fill_u32(0);
@@ -96,7 +106,7 @@ void Mlp::record_product(gpu::Stream& stream, const Product& p, gpu::BufferRange
   const std::uint32_t group_size = workgroup_limit(kMaxForwardGroup);
   const std::uint64_t tiles = (std::uint64_t(batch) + group_size - 1) / group_size;
   // The weights as texels, bound from an aligned offset at or before row 0 (layers start on
-  // kLayerAlignment floats, so the difference is whole vec4).
+  // kLayerAlignment floats, so the difference is 0 on devices that align to 256 bytes or less).
   const std::uint64_t align = std::max<std::uint64_t>(4, context_.info().limits.min_texel_buffer_offset_alignment / 4);
   const std::uint64_t base = p.weight_offset / align * align;
   const gpu::BufferRange w =
@@ -202,8 +212,8 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
   input = gpu::sub_range(input, 4, 0, std::uint64_t(batch) * input_stride());
   grad_output = gpu::sub_range(grad_output, 4, 0, std::uint64_t(batch) * output_stride());
   if (grad_input.size) grad_input = gpu::sub_range(grad_input, 4, 0, std::uint64_t(batch) * input_stride());
-  const gpu::Kernel& transpose = context_.kernel("nn/mlp_transpose", {{0, 256}});
-  const gpu::Kernel& reduce = context_.kernel("nn/mlp_reduce_partials", {{0, 256}});
+  const gpu::Kernel& transpose = context_.kernel("nn/mlp_transpose", {{0, workgroup_limit(256)}});
+  const gpu::Kernel& reduce = context_.kernel("nn/mlp_reduce_partials", {{0, workgroup_limit(256)}});
   const std::uint32_t slab_count = slabs(batch), zt_stride = slab_count * 4 * slab4();
   const std::uint32_t widest_group = workgroup_limit(kMaxWeightGroup);
   gpu::BufferRange grad_y = grad_output;
@@ -214,8 +224,8 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
     const std::uint64_t count = std::uint64_t(l.out_stride) * interleaved_rows(batch);
     const gpu::BufferRange dz = buffers[li % 2]->range(0, count);  // interleaved
     const gpu::BufferRange z = ws.z_[li] ? ws.z_[li]->whole() : gpu::BufferRange{};
-    const gpu::Kernel& act =
-        context_.kernel("nn/mlp_activation_backward", {{0, 256}, {1, std::uint32_t(l.activation.type)}});
+    const gpu::Kernel& act = context_.kernel("nn/mlp_activation_backward",
+                                             {{0, workgroup_limit(256)}, {1, std::uint32_t(l.activation.type)}});
     const gpu::BufferRange dzt = ws.grad_zt_->range(0, std::uint64_t(l.out) * zt_stride);
     stream.dispatch(act, {dz, dzt, grad_y, ws.y_[li]->whole(), z},
                     ActivationBackwardPush{std::uint32_t(interleaved_rows(batch) / 4), batch, l.out, l.out_stride / 4,

@@ -7,9 +7,9 @@
 //   invocation reads its sample's features four at a time (inside an Mlp the hidden layers'
 //   tensors are lane-interleaved instead: shaders/include/nf_rows.glsl);
 // - per layer: weights [out][pad4(in)] row-major (padding columns zero), then biases [out]; both
-//   blocks start on a multiple of 64 floats, so blocks of weight rows and the biases can be bound as
-//   uniform buffers on any device (minUniformBufferOffsetAlignment <= 256 bytes). Alignment gaps
-//   are unused zeros.
+//   blocks start on a multiple of 64 floats, so a layer's weights can be bound as a texel buffer and
+//   its biases as a uniform buffer on any device (both offset alignments are at most 256 bytes).
+//   Alignment gaps are unused zeros.
 #include <cstdint>
 #include <string>
 #include <vector>

@@ -6,7 +6,7 @@
 // zero. A second copy, transposed ([out][zt_stride], samples contiguous), feeds the weight
 // gradient (mlp_backward_weights.comp). An invocation takes four samples of one vec4 of columns,
 // so that it writes whole vec4 to both (on lavapipe each store loops over the lanes; neighbouring
-// lanes take neighbouring samples). grad_y and grad_z may be the same range only when laid out
+// lanes take neighbouring groups of four samples). grad_y and grad_z may be the same range only when laid out
 // alike (each value is then read before its invocation writes it). Reads are texel fetches
 // (straight-line gathers on lavapipe, where storage-buffer loads loop over the lanes) and the
 // activation is a specialisation constant (lavapipe evaluates both sides of a branch).

@@ -4,8 +4,8 @@
 // grad (+)= sum over slabs of partials[slab][p]: the second half of the atomic-free parameter
 // gradient. Each slab's copy holds a layer's weights [out][in_stride] then its biases [out], and
 // copies lie slab_stride4 vec4 apart; in the gradient array they go to the layer's weight and
-// bias offsets. An invocation sums one vec4 of the copies by texel fetch (a straight-line gather
-// on lavapipe, where a storage-buffer load in a loop loops over the lanes).
+// bias offsets. An invocation sums one vec4 of the copies by texel fetch (a gather on lavapipe,
+// where a storage-buffer load loops over the lanes and checks bounds per component).
 
 layout(constant_id = 0) const uint WG = 256;
 layout(local_size_x_id = 0) in;

@@ -3,9 +3,11 @@
 // paths forced (NF_NO_PUSH_DESCRIPTORS=1, NF_FORCE_STAGING=1) so CI exercises them on lavapipe.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdlib>
 #include <numeric>
+#include <string>
 
 #include "engine/core/error.hpp"
 #include "engine/gpu/chunking.hpp"
@@ -51,6 +53,23 @@ TEST_CASE("NF_DEVICE selects by index and by name, and names the devices when no
   ContextOptions none;
   none.device = "no-such-gpu-xyz";
   CHECK_THROWS_WITH_AS(Context{none}, doctest::Contains(devices.front().name.c_str()), UsageError);
+}
+
+TEST_CASE("NF_SHARED_MEMORY caps the shared memory kernels size their tiles by, and refuses nonsense") {
+  ContextOptions capped;
+  capped.shared_memory_cap = 16384;
+  CHECK(Context(capped).info().limits.max_compute_shared_memory ==
+        std::min<std::uint32_t>(16384, test::context().info().limits.max_compute_shared_memory));
+  const char* before = std::getenv("NF_SHARED_MEMORY");
+  const std::string saved = before ? before : "";
+  setenv("NF_SHARED_MEMORY", "16384", 1);
+  CHECK(ContextOptions::from_env().shared_memory_cap == 16384);
+  for (const char* bad : {"1024", "16k", "-1"}) {
+    setenv("NF_SHARED_MEMORY", bad, 1);
+    CHECK_THROWS_WITH_AS(ContextOptions::from_env(), doctest::Contains("NF_SHARED_MEMORY"), InputError);
+  }
+  if (before) setenv("NF_SHARED_MEMORY", saved.c_str(), 1);
+  else unsetenv("NF_SHARED_MEMORY");
 }
 
 TEST_CASE("buffers round-trip data, sub-ranges and fills, including empty buffers") {

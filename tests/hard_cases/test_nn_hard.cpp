@@ -88,13 +88,14 @@ TEST_CASE("an MLP handles empty batches and batches of any size") {
 
 // The layer kernel works in blocks of 32 output rows and at most 64 input vec4 per dispatch; the
 // weight gradient in workgroups of at most 256 outputs x 32 inputs x one slab of 256 samples, then
-// sums the slabs. Widths that are not multiples of a block, a layer wider than one chunk and than
-// one workgroup of outputs, and an odd batch with a short last slab check every edge against the
-// double-precision reference.
+// sums the slabs (with 32 KiB of shared memory; the _small_shared entry runs 16 KiB: 32 input vec4
+// and 128 samples, so three chunks and 71 slabs below). Widths that are not multiples of a block,
+// a layer wider than one chunk and than one workgroup of outputs, and an odd batch with a short
+// last slab check every edge against the double-precision reference.
 TEST_CASE("MLP gradients over several slabs and odd widths match the reference") {
   auto& ctx = test::context();
   MlpConfig c;
-  c.input_dim = 300;    // 75 input vec4: two chunks of mlp_forward; 10 input blocks, the last short
+  c.input_dim = 300;     // 75 input vec4: two chunks of mlp_forward; 10 input blocks, the last short
   c.hidden = {270, 36};  // 270 outputs: two weight-gradient workgroups; its input adjoint: 9 row blocks
   c.output_dim = 5;
   c.hidden_activation = {Activation::Softplus, 2.f, 30.f};
