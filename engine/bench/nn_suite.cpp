@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <random>
 
@@ -118,25 +119,55 @@ json bench_net(gpu::Context& ctx, const NetSpec& net, const Options& options, do
   gpu::Stream s(ctx);
   std::vector<float> losses;
   std::vector<double> step_seconds;
+  std::vector<std::map<std::string, double>> step_passes;  // device ms per pass of each step
   const Timing train = time_repeats(repeats, nullptr, [&] {
     const auto start = std::chrono::steady_clock::now();
-    if (net.encoding == Encoding::Frequency) frequency.forward(s, d_raw, encoded, batch);
-    if (net.encoding == Encoding::HashGrid) {
-      s.fill(table_grad->whole(), 0);
-      grid.forward(s, d_raw, *table, encoded, batch);
+    if (net.encoding != Encoding::None) {
+      gpu::ScopedPass pass(s, "encoding");
+      if (net.encoding == Encoding::Frequency) frequency.forward(s, d_raw, encoded, batch);
+      if (net.encoding == Encoding::HashGrid) {
+        s.fill(table_grad->whole(), 0);
+        grid.forward(s, d_raw, *table, encoded, batch);
+      }
     }
-    mlp.forward(s, ws, input);
-    nn::mse_loss(s, ws.output(), d_target, grad_out, loss, batch, net.mlp.output_dim, mlp.output_stride());
-    const bool need_input_grad = net.encoding == Encoding::HashGrid;
-    mlp.backward(s, ws, input, grad_out, need_input_grad ? grad_in.whole() : gpu::BufferRange{}, false);
-    if (net.encoding == Encoding::HashGrid) grid.backward(s, d_raw, *table, grad_in, *table_grad, {}, batch, false);
-    adam.step(s, mlp.parameters(), mlp.gradients(), 1e-3f);
-    if (table_adam) table_adam->step(s, *table, *table_grad, 1e-2f);
+    {
+      gpu::ScopedPass pass(s, "mlp forward");
+      mlp.forward(s, ws, input);
+    }
+    {
+      gpu::ScopedPass pass(s, "loss");
+      nn::mse_loss(s, ws.output(), d_target, grad_out, loss, batch, net.mlp.output_dim, mlp.output_stride());
+    }
+    {
+      gpu::ScopedPass pass(s, "mlp backward");
+      const bool need_input_grad = net.encoding == Encoding::HashGrid;
+      mlp.backward(s, ws, input, grad_out, need_input_grad ? grad_in.whole() : gpu::BufferRange{}, false);
+    }
+    if (net.encoding == Encoding::HashGrid) {
+      gpu::ScopedPass pass(s, "encoding backward");
+      grid.backward(s, d_raw, *table, grad_in, *table_grad, {}, batch, false);
+    }
+    {
+      gpu::ScopedPass pass(s, "adam");
+      adam.step(s, mlp.parameters(), mlp.gradients(), 1e-3f);
+      if (table_adam) table_adam->step(s, *table, *table_grad, 1e-2f);
+    }
     s.submit_and_wait();
     losses.push_back(loss.download()[0]);
     step_seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    std::map<std::string, double> passes;
+    for (const gpu::PassTime& p : s.last_pass_times()) passes[p.name] += p.milliseconds;
+    step_passes.push_back(passes);
     return -1.0;
   });
+  // Where a step goes on the device: each pass's median over the timed steps (the warm-up dropped).
+  json step_device_ms = json::object();
+  for (const auto& entry : step_passes.back()) {
+    std::vector<double> ms;
+    for (std::size_t i = 1; i < step_passes.size(); ++i)
+      ms.push_back(step_passes[i].count(entry.first) ? step_passes[i].at(entry.first) : 0.0);
+    step_device_ms[entry.first] = nf::median(ms);
+  }
   const double mlp_flops = double(batch) * (mlp.forward_flops_per_sample() + mlp.backward_flops_per_sample());
   const double train_gflops = mlp_flops / train.median() / 1e9;
 
@@ -155,6 +186,7 @@ json bench_net(gpu::Context& ctx, const NetSpec& net, const Options& options, do
                {"infer_GFLOPs", infer_gflops},
                {"infer_fraction_of_fma", infer_gflops / fma_gflops},
                {"device_fma_GFLOPs", fma_gflops},
+               {"train_device_ms", step_device_ms},
                {"loss_first", losses.front()},
                {"loss_last", losses.back()},
                {"loss_finite", std::isfinite(losses.back())}};

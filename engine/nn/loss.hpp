@@ -7,7 +7,8 @@
 
 namespace nf::nn {
 
-// Mean squared error of the first `dims` columns of `prediction` ([batch][stride]) against
+// Mean squared error of the first `dims` columns of `prediction` ([batch][stride], stride a
+// multiple of 4) against
 // `target` ([batch][dims]): writes dL/dprediction into `grad` ([batch][stride]) and the loss
 // into `loss` (one float).
 void mse_loss(gpu::Stream& stream, gpu::BufferRange prediction, gpu::BufferRange target, gpu::BufferRange grad,
