@@ -33,7 +33,7 @@ std::uint64_t interleaved_rows(std::uint64_t batch) { return (batch + kRowGroup 
 struct ForwardPush {
   std::uint32_t batch, out4, out_dim, blocks;
   float beta, omega;
-  std::uint32_t has_bias, accumulate, w_base, stride4, x_first4, x_interleaved, y_interleaved;
+  std::uint32_t has_bias, accumulate, w_base, stride4, x_first4, x_interleaved, y_interleaved, zt_stride;
 };
 struct ActivationBackwardPush {
   std::uint32_t quads, batch, out_dim, out4;
@@ -100,7 +100,8 @@ std::uint32_t Mlp::forward_chunk4() const {
 }
 
 void Mlp::record_product(gpu::Stream& stream, const Product& p, gpu::BufferRange x, gpu::BufferRange y,
-                         gpu::BufferRange z, std::uint32_t batch, Layouts layouts) const {
+                         gpu::BufferRange z, std::uint32_t batch, Layouts layouts,
+                         const AdjointEpilogue& adjoint) const {
   const std::uint32_t in4 = p.in_stride / 4, most4 = forward_chunk4();
   const std::uint32_t blocks = (p.out_dim + kForwardCols - 1) / kForwardCols;
   const std::uint32_t group_size = workgroup_limit(kMaxForwardGroup);
@@ -114,27 +115,33 @@ void Mlp::record_product(gpu::Stream& stream, const Product& p, gpu::BufferRange
   for (std::uint32_t k4 = 0; k4 < in4; k4 += most4) {
     const std::uint32_t chunk4 = std::min(most4, in4 - k4);
     const bool first_chunk = k4 == 0, last_chunk = k4 + chunk4 == in4;
-    const bool store_z = last_chunk && z.size;
+    const bool store_z = last_chunk && z.size, epilogue = last_chunk && adjoint.below.size;
     const gpu::Kernel& k = context_.kernel("nn/mlp_forward:c32s1",
                                            {{0, group_size},
                                             {3, chunk4},
                                             {4, std::uint32_t(last_chunk ? p.activation.type : Activation::None)},
-                                            {5, store_z ? 1u : 0u}});
+                                            {5, store_z ? 1u : 0u},
+                                            {6, epilogue ? 1u : 0u},
+                                            {7, std::uint32_t(adjoint.activation.type)}});
+    const ActivationSpec& a = adjoint.below.size ? adjoint.activation : p.activation;
     const ForwardPush push{batch,
                            p.out_stride / 4,
                            p.out_dim,
                            blocks,
-                           p.activation.beta,
-                           p.activation.omega,
+                           a.beta,
+                           a.omega,
                            first_chunk && p.biases.size ? 1u : 0u,
                            first_chunk ? 0u : 1u,
                            std::uint32_t((p.weight_offset - base) / 4),
                            in4,
                            k4,
                            layouts.x_interleaved,
-                           layouts.y_interleaved};
-    stream.dispatch(k, {y, store_z ? z : gpu::BufferRange{}, p.biases, x, w}, push,
-                    gpu::Elements(blocks * tiles * group_size));
+                           layouts.y_interleaved,
+                           adjoint.zt_stride};
+    stream.dispatch(k,
+                    {y, store_z ? z : gpu::BufferRange{}, epilogue ? adjoint.transposed : gpu::BufferRange{},
+                     p.biases, x, w, epilogue ? adjoint.below : gpu::BufferRange{}},
+                    push, gpu::Elements(blocks * tiles * group_size));
   }
 }
 
@@ -142,7 +149,7 @@ void Mlp::record_layer_forward(gpu::Stream& stream, const LayerShape& l, gpu::Bu
                                gpu::BufferRange z, std::uint32_t batch, Layouts layouts) const {
   const Product p{parameters_.get(), l.weight_offset, l.in_stride, l.out, l.out_stride,
                   parameters_->range(l.bias_offset, l.out), l.activation};
-  record_product(stream, p, x, y, z, batch, layouts);
+  record_product(stream, p, x, y, z, batch, layouts, AdjointEpilogue{});
 }
 
 Mlp::Workspace::Workspace(const Mlp& mlp, std::uint32_t batch) : batch_(batch) {
@@ -216,22 +223,23 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
   const gpu::Kernel& reduce = context_.kernel("nn/mlp_reduce_partials", {{0, workgroup_limit(256)}});
   const std::uint32_t slab_count = slabs(batch), zt_stride = slab_count * 4 * slab4();
   const std::uint32_t widest_group = workgroup_limit(kMaxWeightGroup);
-  gpu::BufferRange grad_y = grad_output;
   gpu::Buffer<float>* buffers[2] = {ws.grad_a_.get(), ws.grad_b_.get()};
   for (std::size_t li = layers_.size(); li-- > 0;) {
     const LayerShape& l = layers_[li];
     const bool last = li + 1 == layers_.size();
     const std::uint64_t count = std::uint64_t(l.out_stride) * interleaved_rows(batch);
     const gpu::BufferRange dz = buffers[li % 2]->range(0, count);  // interleaved
-    const gpu::BufferRange z = ws.z_[li] ? ws.z_[li]->whole() : gpu::BufferRange{};
-    const gpu::Kernel& act = context_.kernel("nn/mlp_activation_backward",
-                                             {{0, workgroup_limit(256)}, {1, std::uint32_t(l.activation.type)}});
     const gpu::BufferRange dzt = ws.grad_zt_->range(0, std::uint64_t(l.out) * zt_stride);
-    stream.dispatch(act, {dz, dzt, grad_y, ws.y_[li]->whole(), z},
-                    ActivationBackwardPush{std::uint32_t(interleaved_rows(batch) / 4), batch, l.out, l.out_stride / 4,
-                                           l.activation.beta, l.activation.omega, 1u, last ? 0u : 1u, last ? 0u : 1u,
-                                           zt_stride / 4},
-                    gpu::Elements(count / 16));
+    if (last) {  // below the top layer, the input adjoint above has written dz and dz^T
+      const gpu::BufferRange z = ws.z_[li] ? ws.z_[li]->whole() : gpu::BufferRange{};
+      const gpu::Kernel& act = context_.kernel("nn/mlp_activation_backward",
+                                               {{0, workgroup_limit(256)}, {1, std::uint32_t(l.activation.type)}});
+      stream.dispatch(act, {dz, dzt, grad_output, ws.y_[li]->whole(), z},
+                      ActivationBackwardPush{std::uint32_t(interleaved_rows(batch) / 4), batch, l.out,
+                                             l.out_stride / 4, l.activation.beta, l.activation.omega, 1u, 0u, 0u,
+                                             zt_stride / 4},
+                      gpu::Elements(count / 16));
+    }
     const gpu::BufferRange x = li == 0 ? input : ws.y_[li - 1]->whole();
     // One lane per output: as few workgroups across the outputs as the device allows, evened out.
     const std::uint32_t o_groups = (l.out + widest_group - 1) / widest_group;
@@ -257,8 +265,15 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
     const gpu::BufferRange dx =
         li == 0 ? grad_input : buffers[(li + 1) % 2]->range(0, std::uint64_t(l.in_stride) * interleaved_rows(batch));
     const Product p{ws.transposed_.get(), 0, l.out_stride, l.in, l.in_stride, {}, {Activation::None}};
-    record_product(stream, p, dz, dx, {}, batch, {1u, li > 0 ? 1u : 0u});
-    grad_y = dx;
+    AdjointEpilogue below;  // a hidden layer below: its dz and dz^T straight from this product
+    if (li > 0) {
+      const LayerShape& b = layers_[li - 1];
+      below.below = b.activation.type == Activation::Sine ? ws.z_[li - 1]->whole() : ws.y_[li - 1]->whole();
+      below.activation = b.activation;
+      below.transposed = ws.grad_zt_->range(0, std::uint64_t(b.out) * zt_stride);
+      below.zt_stride = zt_stride;
+    }
+    record_product(stream, p, dz, dx, {}, batch, {1u, li > 0 ? 1u : 0u}, below);
   }
 }
 

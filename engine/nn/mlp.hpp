@@ -71,8 +71,16 @@ class Mlp {
   struct Layouts {
     std::uint32_t x_interleaved, y_interleaved;
   };
+  // The input adjoint's epilogue for a hidden layer below (mlp_forward.comp, ADJOINT): the product
+  // times that layer's activation derivative, written as its dz and, transposed, as its dz^T.
+  struct AdjointEpilogue {
+    gpu::BufferRange below;  // the layer's output (pre-activation for Sine); empty: no epilogue
+    ActivationSpec activation;
+    gpu::BufferRange transposed;  // [out][zt_stride]
+    std::uint32_t zt_stride = 0;
+  };
   void record_product(gpu::Stream& stream, const Product& product, gpu::BufferRange x, gpu::BufferRange y,
-                      gpu::BufferRange z, std::uint32_t batch, Layouts layouts) const;
+                      gpu::BufferRange z, std::uint32_t batch, Layouts layouts, const AdjointEpilogue& adjoint) const;
   void record_layer_forward(gpu::Stream& stream, const LayerShape& layer, gpu::BufferRange x, gpu::BufferRange y,
                             gpu::BufferRange z, std::uint32_t batch, Layouts layouts) const;
   // Input vec4 per mlp_forward dispatch on this device (its weight block fills shared memory).

@@ -9,8 +9,9 @@
 // the block's inputs for the slab's samples in shared memory; after the barrier every input is
 // read at a constant offset outside any loop or branch, the one load lavapipe (Mesa 22.3) turns
 // into a single broadcast without a bounds check (see mlp_forward.comp). Each lane then fetches
-// its output's dz for four samples at a time from the transposed copy dz^T (one texel fetch, a
-// straight-line gather, per 128 multiply-adds) and keeps COLS sums in registers. The slab is
+// its output's dz for four samples at a time from the transposed copy dz^T (written by the
+// activation adjoint for the top layer, by the input adjoint above for hidden ones; one texel
+// fetch, a straight-line gather, per 128 multiply-adds) and keeps COLS sums in registers. The slab is
 // unrolled; without branches LLVM compiles it in about a second. Workgroups take the outputs and
 // input blocks of one slab in turn, so the slab's rows are read from cache after the first.
 layout(constant_id = 0) const uint WG = 64;      // outputs per workgroup

@@ -17,7 +17,11 @@
 // clamped instead of returning (a barrier needs every invocation), and only the stores are
 // conditional. Later chunks of a wider layer add to y; the bias enters with the first chunk, the
 // activation with the last (a specialisation constant: lavapipe evaluates both sides of a branch).
-// The same kernel computes the input adjoint dx = W^T dz, on transposed weights.
+// The same kernel computes the input adjoint dx = W^T dz, on transposed weights. There, for a
+// hidden layer below, the last chunk also applies that layer's activation derivative (ADJOINT:
+// from its output, or its pre-activation for Sine, by texel fetch) and writes the result twice:
+// as that layer's dz in y's layout and transposed ([row][zt_stride], samples contiguous) for its
+// weight gradient, which saves a pass that would read and write all of it again.
 // Layout: engine/nn/mlp_config.hpp. Host: engine/nn/mlp.cpp.
 //! variant c32s1 -DCOLS=32 -DSAMPLES=1
 
@@ -25,6 +29,8 @@ layout(constant_id = 0) const uint WG = 256;
 layout(constant_id = 3) const uint IN4 = 1;         // input vec4 in this dispatch's chunk
 layout(constant_id = 4) const uint ACTIVATION = 0;  // NF_ACT_*: NONE but on a layer's last chunk
 layout(constant_id = 5) const bool STORE_Z = false;  // keep pre-activations (Sine layers in training)
+layout(constant_id = 6) const bool ADJOINT = false;  // input adjoint's last chunk: times act'(below), dz^T too
+layout(constant_id = 7) const uint ADJOINT_ACTIVATION = 0;  // NF_ACT_* of the layer below
 layout(local_size_x_id = 0) in;
 #include "nf_index.glsl"
 #include "nf_activation.glsl"
@@ -32,9 +38,11 @@ layout(local_size_x_id = 0) in;
 
 layout(std430, binding = 0) buffer Output { vec4 y[]; };                   // [batch][out4]: nf_rows.glsl
 layout(std430, binding = 1) writeonly buffer PreActivation { vec4 z[]; };  // when STORE_Z
+layout(std430, binding = 2) writeonly buffer Transposed { float zt[]; };   // when ADJOINT: [row][zt_stride]
 layout(std140, binding = 12) uniform Biases { vec4 b4[256]; };             // the layer's biases
 layout(binding = 16) uniform samplerBuffer x;  // [batch][stride4]: nf_rows.glsl
 layout(binding = 17) uniform samplerBuffer w;  // [out_dim][stride4] from vec4 w_base on
+layout(binding = 18) uniform samplerBuffer below;  // when ADJOINT: the layer below's y (z for Sine), y's layout
 
 layout(push_constant) uniform Push {
   uint batch;
@@ -50,6 +58,7 @@ layout(push_constant) uniform Push {
   uint x_first4;    // first input vec4 of this chunk
   uint x_interleaved;  // nf_rows.glsl layouts of x and of y (and z)
   uint y_interleaved;
+  uint zt_stride;  // floats per row of zt
 } pc;
 
 shared vec4 w_block[COLS * IN4];  // this workgroup's rows of the chunk, row-major
@@ -98,10 +107,22 @@ void main() {
         // The earlier chunks' sums, by storage load under the branch: the first chunk skips it.
         if (pc.accumulate != 0u) pre += y[i];
         vec4 post;
-        [[unroll]] for (uint e = 0u; e < 4u; ++e) {
-          const bool real = o + e < pc.out_dim;  // padding columns stay zero
-          pre[e] = real ? pre[e] : 0.0;
-          post[e] = real ? nf_activate(ACTIVATION, pc.beta, pc.omega, pre[e]) : 0.0;
+        if (ADJOINT) {
+          const vec4 v = texelFetch(below, int(i));
+          [[unroll]] for (uint e = 0u; e < 4u; ++e) {
+            const float d = ADJOINT_ACTIVATION == NF_ACT_SINE
+                                ? nf_activate_derivative(ADJOINT_ACTIVATION, pc.beta, pc.omega, 0.0, v[e])
+                                : nf_activate_derivative(ADJOINT_ACTIVATION, pc.beta, pc.omega, v[e], 0.0);
+            post[e] = o + e < pc.out_dim ? pre[e] * d : 0.0;
+          }
+          [[unroll]] for (uint e = 0u; e < 4u; ++e)
+            if (o + e < pc.out_dim) zt[(o + e) * pc.zt_stride + first_sample + NF_ROW_GROUP * t] = post[e];
+        } else {
+          [[unroll]] for (uint e = 0u; e < 4u; ++e) {
+            const bool real = o + e < pc.out_dim;  // padding columns stay zero
+            pre[e] = real ? pre[e] : 0.0;
+            post[e] = real ? nf_activate(ACTIVATION, pc.beta, pc.omega, pre[e]) : 0.0;
+          }
         }
         y[i] = post;
         if (STORE_Z) z[i] = pre;
