@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """PyTorch CPU peer for `nf_gpu bench --suite nn`: one MLP training step (forward, MSE, backward,
 AdamW) timed the same way, printed as JSON. Needs Debian's python3-torch and libopenblas0-openmp
-(`tools/nf bench` installs them); run with /usr/bin/python3."""
+(`tools/nf bench` installs them); run with /usr/bin/python3. `--device cuda` times the same step
+on a CUDA GPU instead (a PyTorch with CUDA), the peer for runs of the bench on an NVIDIA GPU."""
 import argparse
 import json
 import statistics
@@ -20,6 +21,7 @@ parser.add_argument("--outputs", type=int, required=True)
 parser.add_argument("--activation", default="relu")
 parser.add_argument("--batch", type=int, required=True)
 parser.add_argument("--steps", type=int, default=7)
+parser.add_argument("--device", default="cpu")
 args = parser.parse_args()
 
 torch.manual_seed(0)
@@ -30,10 +32,10 @@ for i in range(len(widths) - 1):
     layers.append(torch.nn.Linear(widths[i], widths[i + 1]))
     if i + 2 < len(widths):
         layers.append(act())
-net = torch.nn.Sequential(*layers)
+net = torch.nn.Sequential(*layers).to(args.device)
 opt = torch.optim.AdamW(net.parameters(), lr=1e-3, weight_decay=0.0)
-x = torch.rand(args.batch, args.inputs)
-y = torch.rand(args.batch, args.outputs) - 0.5
+x = torch.rand(args.batch, args.inputs, device=args.device)
+y = torch.rand(args.batch, args.outputs, device=args.device) - 0.5
 
 
 def step():
@@ -57,6 +59,7 @@ median = statistics.median(times)
 print(json.dumps({
     "available": True,
     "torch": torch.__version__,
+    "device": args.device,
     "threads": torch.get_num_threads(),
     "blas": "openblas" if "openblas" in torch.__config__.show().lower() else "other",
     "train_seconds_per_step": median,

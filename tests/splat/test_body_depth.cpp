@@ -148,7 +148,7 @@ TEST_CASE("random triangles, some behind the camera or across the near plane: GP
   }
 }
 
-TEST_CASE("a plane filling the view (big triangles): exact depth everywhere, tilted plane analytic") {
+TEST_CASE("a plane filling the view (big triangles): its depth everywhere, tilted plane analytic") {
   auto& ctx = test::context();
   for (const auto& [w, h] : {std::pair{1u, 1u}, std::pair{1920u, 1080u}, std::pair{37u, 5u}}) {
     DepthCamera cam;
@@ -159,7 +159,8 @@ TEST_CASE("a plane filling the view (big triangles): exact depth everywhere, til
     const std::vector<std::uint32_t> quad = {0, 1, 2, 0, 2, 3};
     const auto d = body_depth(ctx, cam, flat, quad);
     REQUIRE(d.size() == std::size_t(w) * h);
-    CHECK(std::all_of(d.begin(), d.end(), [](float x) { return x == 3.0f; }));
+    // Exact on lavapipe; GPUs contract the interpolation's multiply-adds, so allow a few ulp.
+    CHECK(std::all_of(d.begin(), d.end(), [](float x) { return std::fabs(x - 3.0f) <= 4 * 2.4e-7f * 3.0f; }));
     // Tilted: the plane z = -3 + 0.5 x.
     std::vector<float> tilted = flat;
     for (int v = 0; v < 4; ++v) tilted[3 * v + 2] = -3.0f + 0.5f * tilted[3 * v];
