@@ -3,7 +3,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <map>
 #include <memory>
 #include <random>
 
@@ -119,9 +118,9 @@ json bench_net(gpu::Context& ctx, const NetSpec& net, const Options& options, do
   gpu::Stream s(ctx);
   std::vector<float> losses;
   std::vector<double> step_seconds;
-  std::vector<std::map<std::string, double>> step_passes;  // device ms per pass of each step
   const Timing train = time_repeats(repeats, nullptr, [&] {
     const auto start = std::chrono::steady_clock::now();
+    if (losses.size() == 1) ctx.reset_pass_totals();  // the warm-up step's passes do not count
     if (net.encoding != Encoding::None) {
       gpu::ScopedPass pass(s, "encoding");
       if (net.encoding == Encoding::Frequency) frequency.forward(s, d_raw, encoded, batch);
@@ -155,19 +154,9 @@ json bench_net(gpu::Context& ctx, const NetSpec& net, const Options& options, do
     s.submit_and_wait();
     losses.push_back(loss.download()[0]);
     step_seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-    std::map<std::string, double> passes;
-    for (const gpu::PassTime& p : s.last_pass_times()) passes[p.name] += p.milliseconds;
-    step_passes.push_back(passes);
     return -1.0;
   });
-  // Where a step goes on the device: each pass's median over the timed steps (the warm-up dropped).
-  json step_device_ms = json::object();
-  for (const auto& entry : step_passes.back()) {
-    std::vector<double> ms;
-    for (std::size_t i = 1; i < step_passes.size(); ++i)
-      ms.push_back(step_passes[i].count(entry.first) ? step_passes[i].at(entry.first) : 0.0);
-    step_device_ms[entry.first] = nf::median(ms);
-  }
+  const json step_device_ms = pass_ms_per_run(ctx, repeats);  // where a step goes on the device
   const double mlp_flops = double(batch) * (mlp.forward_flops_per_sample() + mlp.backward_flops_per_sample());
   const double train_gflops = mlp_flops / train.median() / 1e9;
 

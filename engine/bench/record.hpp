@@ -2,6 +2,7 @@
 // Building bench records: repeated timing with medians, and the common record fields.
 #include <chrono>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,13 @@ inline Timing time_repeats(int repeats, const std::function<void()>& setup, cons
     if (gpu >= 0) t.gpu_ms.push_back(gpu);
   }
   return t;
+}
+
+// Device milliseconds per run of each named pass the context timed since its totals were reset.
+inline std::map<std::string, double> pass_ms_per_run(const gpu::Context& ctx, int runs) {
+  std::map<std::string, double> out;
+  for (const auto& [name, total] : ctx.pass_totals()) out[name] = total.milliseconds / runs;
+  return out;
 }
 
 inline json make_record(const gpu::Context& context, const std::string& suite, const std::string& name,

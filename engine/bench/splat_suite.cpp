@@ -43,12 +43,6 @@ Scene make_scene(std::uint32_t strands, std::uint32_t points) {
   return s;
 }
 
-std::map<std::string, double> pass_ms_per_run(gpu::Context& ctx, int runs) {
-  std::map<std::string, double> out;
-  for (const auto& [name, total] : ctx.pass_totals()) out[name] = total.milliseconds / runs;
-  return out;
-}
-
 }  // namespace
 
 json run_splat_suite(gpu::Context& ctx, const Options& options) {

@@ -38,7 +38,7 @@ struct ForwardPush {
 struct ActivationBackwardPush {
   std::uint32_t quads, batch, out_dim, out4;
   float beta, omega;
-  std::uint32_t grad_z_interleaved, grad_y_interleaved, y_interleaved, zt_stride4;
+  std::uint32_t zt_stride4;
 };
 struct TransposePush {
   std::uint32_t in_dim, in_stride, out_dim, out_stride, weight_offset;
@@ -231,13 +231,11 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
     const gpu::BufferRange dz = buffers[li % 2]->range(0, count);  // interleaved
     const gpu::BufferRange dzt = ws.grad_zt_->range(0, std::uint64_t(l.out) * zt_stride);
     if (last) {  // below the top layer, the input adjoint above has written dz and dz^T
-      const gpu::BufferRange z = ws.z_[li] ? ws.z_[li]->whole() : gpu::BufferRange{};
       const gpu::Kernel& act = context_.kernel("nn/mlp_activation_backward",
                                                {{0, workgroup_limit(256)}, {1, std::uint32_t(l.activation.type)}});
-      stream.dispatch(act, {dz, dzt, grad_output, ws.y_[li]->whole(), z},
+      stream.dispatch(act, {dz, dzt, grad_output, ws.kept(li)},
                       ActivationBackwardPush{std::uint32_t(interleaved_rows(batch) / 4), batch, l.out,
-                                             l.out_stride / 4, l.activation.beta, l.activation.omega, 1u, 0u, 0u,
-                                             zt_stride / 4},
+                                             l.out_stride / 4, l.activation.beta, l.activation.omega, zt_stride / 4},
                       gpu::Elements(count / 16));
     }
     const gpu::BufferRange x = li == 0 ? input : ws.y_[li - 1]->whole();
@@ -268,7 +266,7 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
     AdjointEpilogue below;  // a hidden layer below: its dz and dz^T straight from this product
     if (li > 0) {
       const LayerShape& b = layers_[li - 1];
-      below.below = b.activation.type == Activation::Sine ? ws.z_[li - 1]->whole() : ws.y_[li - 1]->whole();
+      below.below = ws.kept(li - 1);
       below.activation = b.activation;
       below.transposed = ws.grad_zt_->range(0, std::uint64_t(b.out) * zt_stride);
       below.zt_stride = zt_stride;

@@ -36,6 +36,8 @@ class Mlp {
 
    private:
     friend class Mlp;
+    // What layer li's activation derivative is taken from: its output, its pre-activation for Sine.
+    gpu::BufferRange kept(std::size_t li) const { return (z_[li] ? z_[li] : y_[li])->whole(); }
     std::uint32_t batch_;
     std::vector<std::unique_ptr<gpu::Buffer<float>>> y_, z_;  // per layer; z_ only for Sine layers
     std::unique_ptr<gpu::Buffer<float>> grad_a_, grad_b_, grad_zt_, partials_, transposed_;

@@ -71,12 +71,12 @@ Case softplus_big_case() {
   return c;
 }
 
-// Layers wider than one mlp_forward dispatch: inputs split into chunks that accumulate (100 and 72
-// inputs: 16 + 9 and 16 + 2 vec4) and outputs into row blocks with a short last one (70 = 8 x 8 + 6
-// rows on CPU devices, 32 + 32 + 6 on GPUs). Finite differences over ~10k parameters would take
-// minutes; the small cases cover them, so this one checks the device against the reference only.
+// Layers wider than one mlp_forward dispatch: 300 inputs split into chunks that accumulate (64 + 11
+// vec4 with 32 KiB of shared memory) and outputs into row blocks with a short last one (70 = 32 +
+// 32 + 6). Finite differences over ~25k parameters would take minutes; the small cases cover them,
+// so this one checks the device against the reference only.
 Case wide_case() {
-  Case c = make_case("wide_chunked", Activation::Softplus, Activation::None, 37, 1.0, 10, 30, 6, {100, 70, 40, 3});
+  Case c = make_case("wide_chunked", Activation::Softplus, Activation::None, 37, 1.0, 10, 30, 6, {300, 70, 40, 3});
   c.step_double = {0.0, 0.0};
   c.step_float = {0.0, 0.0};
   return c;

@@ -34,4 +34,10 @@ float nf_activate_derivative(uint type, float beta, float omega, float y, float 
   return 1.0;
 }
 
+// The same from the one tensor training keeps for it: the output y, or z for Sine.
+float nf_activate_derivative_kept(uint type, float beta, float omega, float kept) {
+  return type == NF_ACT_SINE ? nf_activate_derivative(type, beta, omega, 0.0, kept)
+                             : nf_activate_derivative(type, beta, omega, kept, 0.0);
+}
+
 #endif

@@ -110,9 +110,7 @@ void main() {
         if (ADJOINT) {
           const vec4 v = texelFetch(below, int(i));
           [[unroll]] for (uint e = 0u; e < 4u; ++e) {
-            const float d = ADJOINT_ACTIVATION == NF_ACT_SINE
-                                ? nf_activate_derivative(ADJOINT_ACTIVATION, pc.beta, pc.omega, 0.0, v[e])
-                                : nf_activate_derivative(ADJOINT_ACTIVATION, pc.beta, pc.omega, v[e], 0.0);
+            const float d = nf_activate_derivative_kept(ADJOINT_ACTIVATION, pc.beta, pc.omega, v[e]);
             post[e] = o + e < pc.out_dim ? pre[e] * d : 0.0;
           }
           [[unroll]] for (uint e = 0u; e < 4u; ++e)
