@@ -241,7 +241,7 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
     const gpu::BufferRange x = li == 0 ? input : ws.y_[li - 1]->whole();
     // One lane per output: as few workgroups across the outputs as the device allows, evened out.
     const std::uint32_t o_groups = (l.out + widest_group - 1) / widest_group;
-    const std::uint32_t group_size = ((l.out + o_groups - 1) / o_groups + 7) / 8 * 8;
+    const std::uint32_t group_size = ((l.out + o_groups - 1) / o_groups + kRowGroup - 1) / kRowGroup * kRowGroup;
     const gpu::Kernel& weights = context_.kernel("nn/mlp_backward_weights", {{0, group_size}, {1, slab4()}});
     const std::uint32_t i_blocks = (l.in_stride + kWeightCols - 1) / kWeightCols;
     const std::uint32_t groups = o_groups * i_blocks * slab_count;
