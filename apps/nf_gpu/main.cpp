@@ -1,19 +1,20 @@
 // nf_gpu: the command line. Parsing and printing only; the work lives in engine/.
 #include <CLI/CLI.hpp>
 
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 
 #include "engine/bench/suites.hpp"
+#include "engine/body/quadruped.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/interrupt.hpp"
+#include "engine/core/text.hpp"
 #include "engine/core/json.hpp"
 #include "engine/core/log.hpp"
 #include "engine/gpu/context.hpp"
 #include "engine/gradcheck/catalog.hpp"
-#include "engine/io/strand_files.hpp"
-#include "engine/io/mesh.hpp"
-#include "engine/metrics/strand_metrics.hpp"
-#include "engine/metrics/surface_metrics.hpp"
+#include "engine/metrics/metrics_report.hpp"
 #include "engine/synth/preview.hpp"
 #include "engine/orient/scene_orientation.hpp"
 #include "engine/pipeline/stages.hpp"
@@ -89,65 +90,54 @@ int run_gradcheck(const std::string& only, bool as_json) {
   return ok ? 0 : int(nf::ExitCode::DeviceOrInternal);
 }
 
-struct MetricsOptions {
-  std::string pred, gt, outer, mesh, reference;
-  double fscore_mm = 5.0;
-  double scale = 1.0;
-  std::uint32_t strands = 100000, points = 100;
-  unsigned seed = 1;
-  bool json_out = false;
-};
-
-int run_surface_metrics(const MetricsOptions& o) {
-  const auto m = nf::metrics::surface_metrics(nf::io::read_mesh(o.mesh), nf::io::read_mesh(o.reference), o.scale, o.fscore_mm);
-  const nf::json out{{"mesh", o.mesh}, {"reference", o.reference}, {"cm_per_unit", o.scale}, {"surface", nf::metrics::to_json(m)}};
-  if (o.json_out) {
-    std::cout << out.dump(2) << "\n";
-    return 0;
-  }
-  std::printf("%s against %s (%llu samples each, %g cm per unit)\n", o.mesh.c_str(), o.reference.c_str(),
-              (unsigned long long)m.samples, o.scale);
-  std::printf("  chamfer mm          mean %.4g  min %.4g  max %.4g\n", m.chamfer_mean_mm, m.chamfer_min_mm, m.chamfer_max_mm);
-  std::printf("  accuracy mm         %.4g\n  completeness mm     %.4g\n", m.accuracy_mm, m.completeness_mm);
-  std::printf("  normal consistency  %.4f\n", m.normal_consistency);
-  std::printf("  F-score at %g mm    precision %.2f  recall %.2f  F %.2f\n", m.fscore_threshold_mm, m.precision, m.recall, m.fscore);
+int print_surface_metrics(const json& out) {
+  const json& m = out["surface"];
+  std::printf("%s against %s (%llu samples each, %g cm per unit from %s)\n", out["mesh"].get<std::string>().c_str(),
+              out["reference"].get<std::string>().c_str(), (unsigned long long)m["samples"].get<std::uint64_t>(),
+              out["cm_per_unit"].get<double>(), out["scale_source"].get<std::string>().c_str());
+  std::printf("  chamfer mm          mean %.4g  min %.4g  max %.4g\n", m["chamfer_mm"]["mean"].get<double>(),
+              m["chamfer_mm"]["min"].get<double>(), m["chamfer_mm"]["max"].get<double>());
+  std::printf("  accuracy mm         %.4g\n  completeness mm     %.4g\n", m["accuracy_mm"].get<double>(),
+              m["completeness_mm"].get<double>());
+  std::printf("  normal consistency  %.4f\n", m["normal_consistency"].get<double>());
+  const json& f = m["fscore"];
+  std::printf("  F-score at %g mm    precision %.2f  recall %.2f  F %.2f\n", f["threshold_mm"].get<double>(),
+              f["precision"].get<double>(), f["recall"].get<double>(), f["fscore"].get<double>());
   return 0;
 }
 
-int run_metrics(const MetricsOptions& o) {
-  if (!o.mesh.empty() || !o.reference.empty()) {
-    if (o.mesh.empty() || o.reference.empty()) throw nf::UsageError("surface metrics need both --mesh and --ref");
-    return run_surface_metrics(o);
-  }
-  if (o.pred.empty()) throw nf::UsageError("metrics need --pred (strands) or --mesh and --ref (surfaces)");
-  const auto pred = nf::metrics::sample_strands(nf::io::read_strands(o.pred), o.strands, o.points, o.seed);
-  nf::json out{{"pred", o.pred}, {"strands", pred.strands}, {"points_per_strand", pred.points},
-               {"cm_per_unit", o.scale}, {"consistency", nf::metrics::to_json(nf::metrics::consistency_metrics(pred, o.scale))}};
-  if (!o.gt.empty()) {
-    const auto gt = nf::metrics::sample_strands(nf::io::read_strands(o.gt), o.strands, o.points, o.seed + 1);
-    out["gt"] = o.gt;
-    out["match"] = nf::metrics::to_json(nf::metrics::match_scores(pred, gt, nf::metrics::default_thresholds(), o.scale));
-  }
-  if (!o.outer.empty())
-    out["tips_to_outer"] = nf::metrics::to_json(nf::metrics::tip_chamfer(pred, nf::io::read_mesh(o.outer), o.scale));
-  if (o.json_out) {
-    std::cout << out.dump(2) << "\n";
-    return 0;
-  }
-  std::cout << "strands: " << pred.strands << " sampled from " << o.pred << " (" << pred.points << " points each, "
-            << o.scale << " cm per unit)\n";
+int print_strand_metrics(const json& out) {
+  std::cout << "strands: " << out["strands"] << " sampled from " << out["pred"].get<std::string>() << " ("
+            << out["points_per_strand"] << " points each, " << out["cm_per_unit"].get<double>() << " cm per unit from "
+            << out["scale_source"].get<std::string>() << ")\n";
   for (const auto& [key, value] : out["consistency"].items()) std::printf("  %-28s %12.6g\n", key.c_str(), value.get<double>());
   if (out.contains("match")) {
-    std::cout << "against " << o.gt << ":\n  distance  angle  directed  precision  recall  F-score\n";
+    std::cout << "against " << out["gt"].get<std::string>() << ":\n  distance  angle  directed  precision  recall  F-score\n";
     for (const auto& m : out["match"])
-      std::printf("  %5.1f cm %5.0f°  %-8s  %9.2f  %6.2f  %7.2f\n", m["distance_cm"].get<double>(),
+      std::printf("  %5.2g cm %5.0f°  %-8s  %9.2f  %6.2f  %7.2f\n", m["distance_cm"].get<double>(),
                   m["angle_deg"].get<double>(), m["directed"].get<bool>() ? "yes" : "no", m["precision"].get<double>(),
                   m["recall"].get<double>(), m["fscore"].get<double>());
   }
   if (out.contains("tips_to_outer"))
-    std::printf("strand tips against %s: two-way chamfer %.4g mm\n", o.outer.c_str(),
+    std::printf("strand tips against the outer surface: two-way chamfer %.4g mm\n",
                 out["tips_to_outer"]["two_way_mm"].get<double>());
   return 0;
+}
+
+int run_metrics(const nf::metrics::MetricsRequest& r, bool as_json) {
+  json out;
+  if (!r.mesh.empty() || !r.reference.empty()) {
+    if (r.mesh.empty() || r.reference.empty()) throw nf::UsageError("surface metrics need both --mesh and --ref");
+    out = nf::metrics::surface_report(r);
+  } else {
+    if (r.pred.empty()) throw nf::UsageError("metrics need --pred (strands) or --mesh and --ref (surfaces)");
+    out = nf::metrics::strand_report(r);
+  }
+  if (as_json) {
+    std::cout << out.dump(2) << "\n";
+    return 0;
+  }
+  return out.contains("surface") ? print_surface_metrics(out) : print_strand_metrics(out);
 }
 
 int run_synth(const std::string& out, const nf::synth::SynthOptions& options) {
@@ -183,9 +173,17 @@ int run_bench(const nf::bench::Options& options, const std::string& json_path, b
   return 0;
 }
 
-int run_reconstruct(const nf::pipeline::ReconstructOptions& options, bool as_json, bool profile) {
+int run_reconstruct(const nf::pipeline::ReconstructOptions& options, bool as_json, bool profile,
+                    const std::string& command_line) {
   nf::gpu::Context context;
-  const auto outcomes = nf::pipeline::reconstruct(context, options);
+  nf::install_interrupt_handler();
+  std::vector<nf::pipeline::StageOutcome> outcomes;
+  try {
+    outcomes = nf::pipeline::reconstruct(context, options);
+  } catch (const nf::Interrupted& e) {
+    std::cerr << "nf_gpu: " << e.what() << "\nresume with the same command: " << command_line << "\n";
+    return int(e.code());
+  }
   if (profile) print_profile(context);
   if (as_json) {
     json out = json::array();
@@ -199,6 +197,21 @@ int run_reconstruct(const nf::pipeline::ReconstructOptions& options, bool as_jso
                 o.ran ? (std::to_string(o.seconds) + " s").c_str() : "");
   std::printf("outputs in %s\n", options.work.string().c_str());
   return 0;
+}
+
+// The command as typed, quoted where needed, for "resume with" messages.
+std::string quoted_command_line(int argc, char** argv) {
+  std::string line;
+  for (int i = 0; i < argc; ++i) {
+    std::string arg = argv[i];
+    if (arg.find_first_of(" \t'\"$`\\") != std::string::npos) {
+      std::string q = "'";
+      for (char ch : arg) q += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
+      arg = q + "'";
+    }
+    line += (i ? " " : "") + arg;
+  }
+  return line;
 }
 
 }  // namespace
@@ -229,25 +242,33 @@ int main(int argc, char** argv) {
   bench->add_option("--torch-peer", bench_options.torch_peer,
                     "tools/bench_torch_nn.py: time PyTorch on the CPU as a peer (suite nn)");
 
-  MetricsOptions metrics_options;
+  nf::metrics::MetricsRequest metrics_request;
+  std::string metrics_pred, metrics_gt, metrics_outer, metrics_mesh, metrics_reference;
+  double metrics_scale = 0;
+  bool metrics_json = false;
   auto* metrics = app.add_subcommand("metrics", "strand metrics (paper supplementary): consistency, and P/R/F against ground truth");
-  metrics->add_option("--pred", metrics_options.pred, "predicted strands (.hair, .ply, .obj, .usda)")->check(CLI::ExistingFile);
-  metrics->add_option("--outer", metrics_options.outer, "outer surface mesh: two-way chamfer with the strand tips")->check(CLI::ExistingFile);
-  metrics->add_option("--mesh", metrics_options.mesh, "surface metrics: this mesh (.ply, .obj)...")->check(CLI::ExistingFile);
-  metrics->add_option("--ref", metrics_options.reference, "...against this reference mesh")->check(CLI::ExistingFile);
-  metrics->add_option("--fscore-mm", metrics_options.fscore_mm, "surface F-score distance in mm (default 5)")->check(CLI::PositiveNumber);
-  metrics->add_option("--gt", metrics_options.gt, "ground-truth strands")->check(CLI::ExistingFile);
-  metrics->add_option("--scale", metrics_options.scale, "cm per scene unit (default 1)")->check(CLI::PositiveNumber);
-  metrics->add_option("--strands", metrics_options.strands, "strands sampled from each side (default 100000)");
-  metrics->add_option("--points", metrics_options.points, "points per resampled strand (default 100)");
-  metrics->add_option("--seed", metrics_options.seed, "sampling seed");
-  metrics->add_flag("--json", metrics_options.json_out, "machine-readable output");
+  metrics->add_option("--pred", metrics_pred, "predicted strands (.hair, .ply, .obj, .usda)")->check(CLI::ExistingFile);
+  metrics->add_option("--outer", metrics_outer, "outer surface mesh: two-way chamfer with the strand tips")->check(CLI::ExistingFile);
+  metrics->add_option("--mesh", metrics_mesh, "surface metrics: this mesh (.ply, .obj, .glb)...")->check(CLI::ExistingFile);
+  metrics->add_option("--ref", metrics_reference, "...against this reference mesh")->check(CLI::ExistingFile);
+  metrics->add_option("--fscore-mm", metrics_request.fscore_mm, "surface F-score distance in mm (default 5)")->check(CLI::PositiveNumber);
+  metrics->add_option("--gt", metrics_gt, "ground-truth strands")->check(CLI::ExistingFile);
+  metrics->add_option("--scale", metrics_scale,
+                      "cm per scene unit (100 for metres); required unless a scale.json or a synth scene's "
+                      "gt/scene.json beside the files declares it")->check(CLI::PositiveNumber);
+  metrics->add_option("--thresholds", metrics_request.thresholds,
+                      "strand match thresholds: cm (2cm:20,3cm:30,4cm:40, the paper's; default), mm "
+                      "(2mm:20,3mm:30,4mm:40) or a list such as 2cm:20,5mm:10");
+  metrics->add_option("--strands", metrics_request.strands, "strands sampled from each side (default 100000)");
+  metrics->add_option("--points", metrics_request.points, "points per resampled strand (default 100)");
+  metrics->add_option("--seed", metrics_request.seed, "sampling seed");
+  metrics->add_flag("--json", metrics_json, "machine-readable output");
 
   nf::synth::SynthOptions synth_options;
   std::string synth_out;
   auto* synth = app.add_subcommand("synth", "a procedural furry quadruped with ground truth (images, masks, cameras, strands, meshes)");
-  synth->add_option("--animal", synth_options.animal, "cat, dog, fox, panda, tiger or lion")
-      ->check(CLI::IsMember({"cat", "dog", "fox", "panda", "tiger", "lion"}));
+  synth->add_option("--animal", synth_options.animal, nf::join(nf::body::known_animals()))
+      ->check(CLI::IsMember(nf::body::known_animals()));
   synth->add_option("--views", synth_options.views, "number of views, on two camera rings (default 36)")->check(CLI::Range(1, 10000));
   synth->add_option("--res", synth_options.resolution, "image width and height in pixels (default 512)")->check(CLI::Range(8, 8192));
   synth->add_option("--seed", synth_options.seed, "varies proportions, pose, fur and placement (default 1)");
@@ -277,15 +298,23 @@ int main(int argc, char** argv) {
   nf::pipeline::ReconstructOptions reconstruct_options;
   bool reconstruct_json = false;
   std::string reconstruct_scene, reconstruct_out;
-  auto* reconstruct = app.add_subcommand("reconstruct", "the method stage by stage (cached and resumable): surface (neus), ...");
-  reconstruct->add_option("--scene", reconstruct_scene, "scene folder or transforms.json (any format nf_gpu reads)")->required();
-  reconstruct->add_option("--out", reconstruct_out, "WORK folder: one sub-folder per stage (created if needed)")->required();
-  reconstruct->add_option("--quality", reconstruct_options.quality, "draft, default or paper (default: default)")
-      ->check(CLI::IsMember({"draft", "default", "paper"}));
-  reconstruct->add_option("--from", reconstruct_options.run.from, "rerun from this stage even when unchanged");
-  reconstruct->add_option("--to", reconstruct_options.run.to, "stop after this stage");
+  std::string help_stage;
+  bool help_markdown = false;
+  auto* reconstruct = app.add_subcommand("reconstruct", "the method stage by stage (cached and resumable)");
+  reconstruct->footer("stages, in order: " + nf::join(nf::pipeline::stage_names()) +
+                      "\nevery stage's settings: nf_gpu reconstruct --help-stage STAGE (README: 'Settings of each stage')");
+  auto* scene_option = reconstruct->add_option("--scene", reconstruct_scene, "scene folder or transforms.json (any format nf_gpu reads)");
+  auto* out_option = reconstruct->add_option("--out", reconstruct_out, "WORK folder: one sub-folder per stage (created if needed)");
+  reconstruct->add_option("--quality", reconstruct_options.quality,
+                          nf::join(nf::pipeline::quality_names()) + " (default: default; on a CPU driver only draft "
+                          "finishes in minutes)")
+      ->check(CLI::IsMember(nf::pipeline::quality_names()));
+  reconstruct->add_option("--from", reconstruct_options.run.from, "rerun this stage and the stages that depend on it");
+  reconstruct->add_option("--to", reconstruct_options.run.to, "run only this stage and the stages it depends on");
   reconstruct->add_option("--set", reconstruct_options.settings, "override a stage setting: stage.key=value (repeatable)");
   reconstruct->add_flag("--json", reconstruct_json, "machine-readable summary");
+  reconstruct->add_option("--help-stage", help_stage, "print the settings of this stage and exit");
+  reconstruct->add_flag("--markdown", help_markdown, "with --help-stage: a markdown table");
 
   try {
     app.parse(argc, argv);
@@ -298,11 +327,22 @@ int main(int argc, char** argv) {
     if (*info) return run_info(info_json);
     if (*gradcheck) return run_gradcheck(kernel_name, gradcheck_json);
     if (*bench) return run_bench(bench_options, bench_json, profile);
-    if (*metrics) return run_metrics(metrics_options);
+    if (*metrics) {
+      metrics_request.pred = metrics_pred, metrics_request.gt = metrics_gt, metrics_request.outer = metrics_outer;
+      metrics_request.mesh = metrics_mesh, metrics_request.reference = metrics_reference;
+      if (metrics_scale > 0) metrics_request.scale = metrics_scale;
+      return run_metrics(metrics_request, metrics_json);
+    }
     if (*synth) return run_synth(synth_out, synth_options);
     if (*reconstruct) {
+      if (!help_stage.empty()) {
+        std::cout << nf::pipeline::describe_stage_settings(help_stage, help_markdown);
+        return 0;
+      }
+      if (scene_option->count() == 0 || out_option->count() == 0)
+        throw nf::UsageError("reconstruct needs --scene and --out (nf_gpu reconstruct --help)");
       reconstruct_options.scene = reconstruct_scene, reconstruct_options.work = reconstruct_out;
-      return run_reconstruct(reconstruct_options, reconstruct_json, profile);
+      return run_reconstruct(reconstruct_options, reconstruct_json, profile, quoted_command_line(argc, argv));
     }
     if (*orient) {
       orient_options.scene = orient_scene, orient_options.out = orient_out;
@@ -316,6 +356,12 @@ int main(int argc, char** argv) {
   } catch (const nf::Error& e) {
     std::cerr << "nf_gpu: error: " << e.what() << "\n";
     return int(e.code());
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A folder or file the user named cannot be read or written (permissions, a full disk, a file
+    // where a folder should be): bad input, not a bug.
+    std::cerr << "nf_gpu: error: " << (e.path1().empty() ? "" : e.path1().string() + ": ") << e.code().message()
+              << "\n";
+    return int(nf::ExitCode::BadInput);
   } catch (const std::exception& e) {
     std::cerr << "nf_gpu: internal error: " << e.what() << "\n";
     return int(nf::ExitCode::DeviceOrInternal);

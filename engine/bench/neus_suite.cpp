@@ -43,7 +43,7 @@ json run_neus_suite(gpu::Context& ctx, const Options& options) {
   log::info("bench neus: making the synthetic cat (", so.views, " views, ", so.resolution, "^2)");
   const json gt = synth::synthesize_scene(scene_dir.path, so);
   const double cm_per_unit = gt.at("cm_per_unit").get<double>();
-  const io::Mesh reference = io::read_mesh(scene_dir.path / "gt" / "outer.ply");
+  const geometry::Mesh reference = io::read_mesh(scene_dir.path / "gt" / "outer.ply");
 
   const neus::NeusQuality quality = neus::quality_preset("draft");
   neus::NeusTrainingOptions training = quality.training;
@@ -66,7 +66,7 @@ json run_neus_suite(gpu::Context& ctx, const Options& options) {
   double next_eval = 0.0;
   neus::NeusStepReport last;
   const auto evaluate = [&](const neus::NeusStepReport& r) {
-    const io::Mesh mesh = neus::extract_surface(trainer.field(), data.norm, data.hull, eval_resolution);
+    const geometry::Mesh mesh = neus::extract_surface(trainer.field(), data.norm, data.hull, eval_resolution);
     if (mesh.triangle_count() == 0) return;
     const metrics::SurfaceMetrics m = metrics::surface_metrics(mesh, reference, cm_per_unit, 5.0, 50000, 1);
     const double pct = 100.0 * m.chamfer_mean_mm / diagonal_mm;

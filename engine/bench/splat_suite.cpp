@@ -21,7 +21,7 @@ namespace {
 constexpr const char* kSuite = "splat";
 
 struct Scene {
-  io::Mesh body;
+  geometry::Mesh body;
   synth::Fur fur;
   float radius;
   glm::vec3 centre;
@@ -94,7 +94,7 @@ json run_splat_suite(gpu::Context& ctx, const Options& options) {
     look.radius = float(rp.gaussian.width);
     synth::RenderOptions ro;
     ro.samples_per_axis = options.quick ? 2 : 4, ro.render_points = points;
-    const synth::StrandRenderer tracer(io::Mesh{}, {}, scene.fur.strands, look, ro);  // hair silhouette only
+    const synth::StrandRenderer tracer(geometry::Mesh{}, {}, scene.fur.strands, look, ro);  // hair silhouette only
     const synth::Rendered truth = tracer.render(cam);
     const std::vector<float> img = image.download(0, pixels);
     double abs_err = 0, covered = 0, splatted = 0;

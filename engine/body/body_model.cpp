@@ -101,10 +101,10 @@ std::vector<glm::mat4> skinning_matrices(const BodyModel& model, const BodyParam
   return skin;
 }
 
-io::Mesh pose_body_animal_frame(const BodyModel& model, const BodyParams& params) {
+geometry::Mesh pose_body_animal_frame(const BodyModel& model, const BodyParams& params) {
   const std::vector<float> rest = shaped_vertices(model, params.shape);
   const std::vector<glm::mat4> skin = skinning_matrices(model, params);
-  io::Mesh mesh;
+  geometry::Mesh mesh;
   mesh.positions.resize(rest.size());
   for (std::size_t i = 0; i < model.vertex_count(); ++i) {
     glm::mat4 m(0.0f);
@@ -118,8 +118,8 @@ io::Mesh pose_body_animal_frame(const BodyModel& model, const BodyParams& params
   return mesh;
 }
 
-io::Mesh pose_body(const BodyModel& model, const BodyParams& params) {
-  io::Mesh mesh = pose_body_animal_frame(model, params);
+geometry::Mesh pose_body(const BodyModel& model, const BodyParams& params) {
+  geometry::Mesh mesh = pose_body_animal_frame(model, params);
   const glm::mat4 place = params.animal_to_world * glm::scale(glm::mat4(1.0f), glm::vec3(params.scale));
   for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
     const glm::vec4 p = place * glm::vec4(mesh.positions[3 * i], mesh.positions[3 * i + 1], mesh.positions[3 * i + 2], 1.0f);
@@ -130,7 +130,7 @@ io::Mesh pose_body(const BodyModel& model, const BodyParams& params) {
 }
 
 EyeCentres eye_centres(const BodyModel& model, const BodyParams& params) {
-  const io::Mesh posed = pose_body_animal_frame(model, params);
+  const geometry::Mesh posed = pose_body_animal_frame(model, params);
   glm::vec3 sum[2]{glm::vec3(0), glm::vec3(0)};
   int count[2]{0, 0};
   for (std::size_t i = 0; i < posed.vertex_count(); ++i) {

@@ -56,9 +56,9 @@ std::vector<float> shaped_vertices(const BodyModel& model, const std::vector<flo
 std::vector<glm::mat4> skinning_matrices(const BodyModel& model, const BodyParams& params);
 
 // The posed body in world coordinates with area-weighted normals and the model's regions.
-io::Mesh pose_body(const BodyModel& model, const BodyParams& params);
+geometry::Mesh pose_body(const BodyModel& model, const BodyParams& params);
 // The same in the animal frame (no world placement), for rules that need the animal's axes.
-io::Mesh pose_body_animal_frame(const BodyModel& model, const BodyParams& params);
+geometry::Mesh pose_body_animal_frame(const BodyModel& model, const BodyParams& params);
 
 // Eye centres: the mean of the eye-region vertices on each side (+x left, -x right) of the posed
 // body in the animal frame, mapped to the world. Throws when a side has no eye vertices.

@@ -7,6 +7,7 @@
 
 #include "engine/body/regions.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/parallel.hpp"
 #include "engine/geometry/marching_cubes.hpp"
 #include "engine/geometry/mesh_tools.hpp"
 #include "engine/geometry/point_index.hpp"
@@ -221,7 +222,7 @@ float smooth_min(float a, float b, float k) {
   return std::min(a, b) - 0.25f * h * h * k;
 }
 
-io::Mesh extract_surface(const Skeleton& s, float voxel) {
+geometry::Mesh extract_surface(const Skeleton& s, float voxel) {
   const std::array<float, kShapeCount> zero{};
   const std::vector<glm::vec3> joints = joints_for(s, zero);
   std::vector<Ends> ends;
@@ -235,7 +236,7 @@ io::Mesh extract_surface(const Skeleton& s, float voxel) {
   lo -= 3.0f * voxel, hi += 3.0f * voxel;
   const glm::ivec3 dims = glm::ivec3(glm::ceil((hi - lo) / voxel)) + 1;
   std::vector<float> field(std::size_t(dims.x) * dims.y * dims.z);
-  geometry::parallel_for(std::size_t(dims.z), [&](std::size_t z0, std::size_t z1) {
+  parallel_for(std::size_t(dims.z), [&](std::size_t z0, std::size_t z1) {
     for (std::size_t z = z0; z < z1; ++z)
       for (int y = 0; y < dims.y; ++y)
         for (int x = 0; x < dims.x; ++x) {
@@ -246,7 +247,7 @@ io::Mesh extract_surface(const Skeleton& s, float voxel) {
           field[(z * dims.y + y) * dims.x + x] = d;
         }
   });
-  io::Mesh mesh = geometry::marching_cubes(field.data(), dims, lo, glm::vec3(voxel), 0.0f);
+  geometry::Mesh mesh = geometry::marching_cubes(field.data(), dims, lo, glm::vec3(voxel), 0.0f);
   geometry::keep_largest_component(mesh);
   return mesh;
 }
@@ -351,7 +352,7 @@ QuadrupedProportions vary_proportions(const QuadrupedProportions& p, unsigned se
 BodyModel build_quadruped(const QuadrupedProportions& p, const QuadrupedBuildOptions& options) {
   const float voxel = options.voxel > 0 ? options.voxel : p.torso_length / 110.0f;
   const Skeleton s = make_skeleton(p, voxel);
-  const io::Mesh mesh = extract_surface(s, voxel);
+  const geometry::Mesh mesh = extract_surface(s, voxel);
   if (mesh.vertex_count() == 0) throw InternalError("quadruped '" + p.animal + "': the body surface is empty");
 
   BodyModel model;
@@ -375,7 +376,7 @@ BodyModel build_quadruped(const QuadrupedProportions& p, const QuadrupedBuildOpt
   std::vector<Ends> rest_ends;
   for (const Primitive& prim : s.primitives) rest_ends.push_back(ends_for(prim, rest_joints, zero));
   const float temperature = 0.015f * p.torso_length;
-  geometry::parallel_for(nv, [&](std::size_t v0, std::size_t v1) {
+  parallel_for(nv, [&](std::size_t v0, std::size_t v1) {
     std::vector<Local> local(np);
     for (std::size_t i = v0; i < v1; ++i) {
       const glm::vec3 v(mesh.positions[3 * i], mesh.positions[3 * i + 1], mesh.positions[3 * i + 2]);

@@ -1,12 +1,13 @@
 #pragma once
 // Typed errors. Each carries the process exit code the CLI returns for it (DESIGN §10):
-// 1 bad input (the message names the file, field or value), 2 usage, 3 device or internal error.
+// 1 bad input (the message names the file, field or value), 2 usage, 3 device or internal error,
+// 130 stopped by Ctrl-C (128 + SIGINT, as shells report it).
 #include <stdexcept>
 #include <string>
 
 namespace nf {
 
-enum class ExitCode : int { Ok = 0, BadInput = 1, Usage = 2, DeviceOrInternal = 3 };
+enum class ExitCode : int { Ok = 0, BadInput = 1, Usage = 2, DeviceOrInternal = 3, Interrupted = 130 };
 
 class Error : public std::runtime_error {
  public:

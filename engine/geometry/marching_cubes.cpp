@@ -9,6 +9,7 @@
 
 #include "engine/core/error.hpp"
 #include "engine/core/finite.hpp"
+#include "engine/core/parallel.hpp"
 #include "engine/geometry/marching_cubes_table.hpp"
 #include "engine/geometry/point_index.hpp"  // parallel_for
 
@@ -87,7 +88,7 @@ void for_each_layer(int layers, const Body& body) {
 
 }  // namespace
 
-io::Mesh marching_cubes(const float* values, glm::ivec3 dims, glm::vec3 origin, glm::vec3 voxel_size, float iso) {
+geometry::Mesh marching_cubes(const float* values, glm::ivec3 dims, glm::vec3 origin, glm::vec3 voxel_size, float iso) {
   if (dims.x < 0 || dims.y < 0 || dims.z < 0)
     throw InputError("marching_cubes: negative grid size " + std::to_string(dims.x) + "x" + std::to_string(dims.y) +
                      "x" + std::to_string(dims.z));
@@ -96,7 +97,7 @@ io::Mesh marching_cubes(const float* values, glm::ivec3 dims, glm::vec3 origin, 
       throw InputError("marching_cubes: voxel size and origin must be finite, voxel size positive (axis " +
                        std::to_string(a) + ": size " + std::to_string(voxel_size[a]) + ")");
   if (!std::isfinite(iso)) throw InputError("marching_cubes: the iso-value is not finite");
-  io::Mesh mesh;
+  geometry::Mesh mesh;
   if (dims.x < 2 || dims.y < 2 || dims.z < 2) return mesh;
   const std::size_t count = std::size_t(dims.x) * std::size_t(dims.y) * std::size_t(dims.z);
   if (!values) throw InputError("marching_cubes: no values for a non-empty grid");

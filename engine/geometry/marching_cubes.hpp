@@ -3,7 +3,7 @@
 // marching_cubes_table.hpp: watertight, consistent ambiguity rule).
 #include <glm/glm.hpp>
 
-#include "engine/io/mesh.hpp"
+#include "engine/geometry/mesh.hpp"
 
 namespace nf::geometry {
 
@@ -17,6 +17,6 @@ namespace nf::geometry {
 // Throws InputError for negative dims, a non-positive or non-finite voxel size, a non-finite iso,
 // and for any NaN or Inf sample (naming its index). A grid thinner than 2 samples gives an empty mesh.
 // Runs over z-slabs in parallel; the result does not depend on the thread count.
-io::Mesh marching_cubes(const float* values, glm::ivec3 dims, glm::vec3 origin, glm::vec3 voxel_size, float iso = 0.f);
+geometry::Mesh marching_cubes(const float* values, glm::ivec3 dims, glm::vec3 origin, glm::vec3 voxel_size, float iso = 0.f);
 
 }  // namespace nf::geometry

@@ -119,10 +119,10 @@ std::vector<Slab> plan_slabs(std::uint64_t nz, std::uint64_t budget, std::uint64
 
 }  // namespace
 
-io::Mesh marching_cubes_gpu(gpu::Context& context, gpu::BufferRange values, glm::ivec3 dims, glm::vec3 origin,
+geometry::Mesh marching_cubes_gpu(gpu::Context& context, gpu::BufferRange values, glm::ivec3 dims, glm::vec3 origin,
                             glm::vec3 voxel_size, float iso, const MarchingCubesGpuOptions& options) {
   check_grid(dims, origin, voxel_size, iso);
-  io::Mesh mesh;
+  geometry::Mesh mesh;
   if (dims.x < 2 || dims.y < 2 || dims.z < 2) return mesh;
   const std::uint64_t nx = std::uint64_t(dims.x), ny = std::uint64_t(dims.y), nz = std::uint64_t(dims.z);
   const std::uint64_t plane = nx * ny, points = plane * nz;
@@ -258,7 +258,7 @@ io::Mesh marching_cubes_gpu(gpu::Context& context, gpu::BufferRange values, glm:
   return mesh;
 }
 
-io::Mesh marching_cubes_gpu(gpu::Context& context, const std::vector<float>& values, glm::ivec3 dims, glm::vec3 origin,
+geometry::Mesh marching_cubes_gpu(gpu::Context& context, const std::vector<float>& values, glm::ivec3 dims, glm::vec3 origin,
                             glm::vec3 voxel_size, float iso, const MarchingCubesGpuOptions& options) {
   check_grid(dims, origin, voxel_size, iso);
   const std::uint64_t points = std::uint64_t(dims.x) * std::uint64_t(dims.y) * std::uint64_t(dims.z);

@@ -23,7 +23,7 @@
 #include <glm/glm.hpp>
 
 #include "engine/gpu/buffer.hpp"
-#include "engine/io/mesh.hpp"
+#include "engine/geometry/mesh.hpp"
 
 namespace nf::geometry {
 
@@ -38,11 +38,11 @@ struct MarchingCubesGpuOptions {
 // write it. Throws InputError as marching_cubes() does (negative dims, non-positive or non-finite
 // voxel size, non-finite origin or iso, a NaN or Inf sample: the first one by index is named). A grid
 // thinner than 2 samples gives an empty mesh without touching the device.
-io::Mesh marching_cubes_gpu(gpu::Context& context, gpu::BufferRange values, glm::ivec3 dims, glm::vec3 origin,
+geometry::Mesh marching_cubes_gpu(gpu::Context& context, gpu::BufferRange values, glm::ivec3 dims, glm::vec3 origin,
                             glm::vec3 voxel_size, float iso = 0.f, const MarchingCubesGpuOptions& options = {});
 
 // Host convenience: uploads `values` (which must hold exactly dims.x * dims.y * dims.z samples).
-io::Mesh marching_cubes_gpu(gpu::Context& context, const std::vector<float>& values, glm::ivec3 dims, glm::vec3 origin,
+geometry::Mesh marching_cubes_gpu(gpu::Context& context, const std::vector<float>& values, glm::ivec3 dims, glm::vec3 origin,
                             glm::vec3 voxel_size, float iso = 0.f, const MarchingCubesGpuOptions& options = {});
 
 }  // namespace nf::geometry

@@ -14,7 +14,7 @@
 namespace nf::geometry {
 namespace {
 
-void check_indices(const io::Mesh& mesh, const char* what) {
+void check_indices(const geometry::Mesh& mesh, const char* what) {
   const std::uint64_t n = mesh.vertex_count();
   for (std::uint32_t v : mesh.triangles) NF_CHECK(v < n, std::string(what) + ": a face uses a vertex past the end");
 }
@@ -26,7 +26,7 @@ std::uint32_t find_root(std::vector<std::uint32_t>& parent, std::uint32_t v) {
 
 }  // namespace
 
-std::size_t keep_largest_component(io::Mesh& mesh) {
+std::size_t keep_largest_component(geometry::Mesh& mesh) {
   check_indices(mesh, "keep_largest_component");
   const std::size_t nv = mesh.vertex_count(), nt = mesh.triangle_count();
   std::vector<std::uint32_t> parent(nv);
@@ -87,7 +87,7 @@ std::size_t keep_largest_component(io::Mesh& mesh) {
   return components;
 }
 
-void compute_vertex_normals(io::Mesh& mesh) {
+void compute_vertex_normals(geometry::Mesh& mesh) {
   check_indices(mesh, "compute_vertex_normals");
   const std::size_t nv = mesh.vertex_count();
   std::vector<glm::dvec3> sum(nv, glm::dvec3(0.0));
@@ -109,7 +109,7 @@ void compute_vertex_normals(io::Mesh& mesh) {
   }
 }
 
-bool is_closed_manifold(const io::Mesh& mesh) {
+bool is_closed_manifold(const geometry::Mesh& mesh) {
   const std::uint64_t nv = mesh.vertex_count();
   const std::size_t nt = mesh.triangle_count();
   std::vector<std::uint64_t> edges;  // directed: from << 32 | to

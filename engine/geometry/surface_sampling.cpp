@@ -6,7 +6,7 @@
 
 namespace nf::geometry {
 
-SurfaceSamples sample_surface(const io::Mesh& m, std::uint64_t count, unsigned seed) {
+SurfaceSamples sample_surface(const geometry::Mesh& m, std::uint64_t count, unsigned seed) {
   const std::uint64_t faces = m.triangle_count();
   std::vector<double> cumulative(faces);
   std::vector<float> face_normals(faces * 3);

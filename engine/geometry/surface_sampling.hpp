@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "engine/io/mesh.hpp"
+#include "engine/geometry/mesh.hpp"
 
 namespace nf::geometry {
 
@@ -14,6 +14,6 @@ struct SurfaceSamples {
 };
 
 // Degenerate (zero-area) faces are never chosen; a mesh without area gives no samples.
-SurfaceSamples sample_surface(const io::Mesh& mesh, std::uint64_t count, unsigned seed);
+SurfaceSamples sample_surface(const geometry::Mesh& mesh, std::uint64_t count, unsigned seed);
 
 }  // namespace nf::geometry

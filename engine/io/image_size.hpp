@@ -1,13 +1,19 @@
 #pragma once
-// Image dimensions from a PNG or JPEG header, without decoding the pixels (camera readers need the
-// size; the stages decode images when they use them).
+// Cheap checks of PNG and JPEG files that do not decode the pixels: the size from the header (camera
+// readers need it; the stages decode images when they use them), and whether the file is complete.
 #include <cstdint>
 #include <filesystem>
 #include <utility>
 
 namespace nf::io {
 
-// (width, height); throws InputError naming the file when it is not a readable PNG or JPEG.
+// (width, height); throws InputError naming the file when it is not a PNG or JPEG, or its header is
+// truncated or corrupt.
 std::pair<std::uint32_t, std::uint32_t> image_size(const std::filesystem::path& path);
+
+// Throws InputError naming the file and saying "truncated" when a PNG ends before its IEND chunk or
+// a JPEG before its end-of-image marker (an interrupted copy or download). Reads the last bytes only,
+// unless data follows the image's end (phones' motion photos append a video to the JPEG).
+void require_complete_image(const std::filesystem::path& path);
 
 }  // namespace nf::io

@@ -1,24 +1,12 @@
 #pragma once
-// A triangle mesh as the engine and the mesh files share it. Optional per-vertex normals and
-// region labels (DESIGN §5 regions, as small integers) travel with the geometry.
-#include <cstdint>
+// Mesh files: PLY, OBJ and glTF readers and writers of geometry::Mesh.
 #include <filesystem>
-#include <string>
-#include <vector>
+
+#include "engine/geometry/mesh.hpp"
 
 namespace nf::io {
 
-struct Mesh {
-  std::vector<float> positions;         // xyz per vertex
-  std::vector<std::uint32_t> triangles; // 3 vertex indices per face
-  std::vector<float> normals;           // xyz per vertex (empty: absent)
-  std::vector<std::int32_t> regions;    // per vertex (empty: absent)
-
-  std::uint64_t vertex_count() const { return positions.size() / 3; }
-  std::uint64_t triangle_count() const { return triangles.size() / 3; }
-  // Throws InputError naming `source` and the inconsistent field (sizes, indices, NaN/Inf).
-  void validate(const std::string& source) const;
-};
+using geometry::Mesh;  // io reads and writes the geometry module's mesh
 
 // PLY: reads ASCII and binary little-endian files (vertex x y z, optional nx ny nz and an integer
 // region / label property; faces as vertex_indices lists, polygons fanned into triangles); writes
@@ -30,8 +18,9 @@ void write_mesh_ply(const std::filesystem::path& path, const Mesh& mesh);
 Mesh read_mesh_obj(const std::filesystem::path& path);
 void write_mesh_obj(const std::filesystem::path& path, const Mesh& mesh);
 
-// glTF 2.0. The reader takes .glb and .gltf (buffers in the GLB BIN chunk, in external files
-// relative to the .gltf, or in base64 data: URIs). It flattens the default scene (scenes[0] when
+// glTF 2.0, parsed and written by tinygltf. The reader takes .glb and .gltf (buffers in the GLB BIN
+// chunk, in external files relative to the .gltf, or in base64 data: URIs, holding exactly byteLength
+// bytes). It flattens the default scene (scenes[0] when
 // `scene` is unset; every mesh once, untransformed, when there are no scenes): node transforms
 // (matrix or TRS) are applied to positions and normals (inverse transpose; winding flipped under a
 // mirroring transform), and all primitives are merged into one mesh. Modes TRIANGLES, TRIANGLE_STRIP
@@ -43,10 +32,13 @@ void write_mesh_obj(const std::filesystem::path& path, const Mesh& mesh);
 // every merged primitive has them. Refused with an InputError naming the file and the field:
 // sparse accessors, accessors without a bufferView, quantized / Draco / meshopt geometry, non-file
 // URIs (http:), and any count, offset, stride or index out of range, NaN / Inf values, malformed
-// GLB chunks. Morph targets, skins and instancing extensions are ignored.
+// GLB chunks, JSON nested deeper than 256 levels, and sections that tinygltf cannot parse (images,
+// materials, cameras... are parsed though not used; images are never decoded). Morph targets, skins
+// and instancing extensions are ignored.
 // The writer produces GLB only (one scene / node / mesh / primitive; POSITION with min / max,
 // NORMAL, _REGION as FLOAT SCALAR, which Blender imports as a generic attribute, so regions must
-// lie within +-2^24; indices UNSIGNED_INT; a mesh without faces is written as POINTS). Writing
+// lie within +-2^24; indices UNSIGNED_INT; a mesh without faces is written as POINTS, an empty mesh
+// without a scene). Writing
 // .gltf through write_mesh is refused: use .glb.
 Mesh read_mesh_gltf(const std::filesystem::path& path);
 void write_mesh_glb(const std::filesystem::path& path, const Mesh& mesh);

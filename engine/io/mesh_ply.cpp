@@ -1,7 +1,7 @@
 // Meshes as PLY. The reader takes ASCII and binary little-endian files with any element and
 // property layout, keeps what the engine uses (positions, normals, an integer region / label,
-// faces) and skips the rest; the writer produces binary little-endian.
-#include <charconv>
+// faces) and skips the rest; the writer produces binary little-endian. The header is parsed by
+// ply_header.cpp, shared with the strand reader.
 #include <cmath>
 #include <cstring>
 #include <sstream>
@@ -9,67 +9,40 @@
 #include "engine/core/atomic_file.hpp"
 #include "engine/io/binary_io.hpp"
 #include "engine/io/mesh.hpp"
+#include "engine/io/ply_header.hpp"
 
 namespace nf::io {
 namespace {
-
-enum class Scalar { I8, U8, I16, U16, I32, U32, F32, F64 };
-
-Scalar scalar_type(const std::string& name, const std::string& where) {
-  if (name == "char" || name == "int8") return Scalar::I8;
-  if (name == "uchar" || name == "uint8") return Scalar::U8;
-  if (name == "short" || name == "int16") return Scalar::I16;
-  if (name == "ushort" || name == "uint16") return Scalar::U16;
-  if (name == "int" || name == "int32") return Scalar::I32;
-  if (name == "uint" || name == "uint32") return Scalar::U32;
-  if (name == "float" || name == "float32") return Scalar::F32;
-  if (name == "double" || name == "float64") return Scalar::F64;
-  throw InputError(where + ": unknown PLY property type '" + name + "'");
-}
-
-struct Property {
-  std::string name;
-  Scalar type;
-  bool list = false;
-  Scalar count_type = Scalar::U8;
-};
-
-struct Element {
-  std::string name;
-  std::uint64_t count = 0;
-  std::vector<Property> properties;
-};
 
 // Reads one value of `type`, from text tokens or from little-endian bytes.
 class ValueReader {
  public:
   ValueReader(const std::vector<char>& bytes, std::size_t start, bool ascii, std::string where)
-      : bytes_(bytes), ascii_(ascii), where_(std::move(where)), binary_(bytes, where_) {
+      : ascii_(ascii), where_(std::move(where)), binary_(bytes, where_) {
     binary_.seek(start);
     if (ascii) text_.str(std::string(bytes.begin() + std::ptrdiff_t(start), bytes.end()));
   }
 
-  double read(Scalar type, const std::string& field) {
+  double read(PlyScalar type, const std::string& field) {
     if (ascii_) {
       double v;
       if (!(text_ >> v)) throw InputError(where_ + ": " + field + ": missing or not a number (file truncated?)");
       return v;
     }
     switch (type) {
-      case Scalar::I8: return binary_.value<std::int8_t>(field);
-      case Scalar::U8: return binary_.value<std::uint8_t>(field);
-      case Scalar::I16: return binary_.value<std::int16_t>(field);
-      case Scalar::U16: return binary_.value<std::uint16_t>(field);
-      case Scalar::I32: return binary_.value<std::int32_t>(field);
-      case Scalar::U32: return binary_.value<std::uint32_t>(field);
-      case Scalar::F32: return binary_.value<float>(field);
-      case Scalar::F64: return binary_.value<double>(field);
+      case PlyScalar::I8: return binary_.value<std::int8_t>(field);
+      case PlyScalar::U8: return binary_.value<std::uint8_t>(field);
+      case PlyScalar::I16: return binary_.value<std::int16_t>(field);
+      case PlyScalar::U16: return binary_.value<std::uint16_t>(field);
+      case PlyScalar::I32: return binary_.value<std::int32_t>(field);
+      case PlyScalar::U32: return binary_.value<std::uint32_t>(field);
+      case PlyScalar::F32: return binary_.value<float>(field);
+      case PlyScalar::F64: return binary_.value<double>(field);
     }
     return 0;
   }
 
  private:
-  const std::vector<char>& bytes_;
   bool ascii_;
   std::string where_;
   ByteReader binary_;
@@ -81,59 +54,19 @@ class ValueReader {
 Mesh read_mesh_ply(const std::filesystem::path& path) {
   const std::string where = path.string();
   const std::vector<char> bytes = read_file_bytes(path);
-  const std::string head(bytes.begin(), bytes.begin() + std::ptrdiff_t(std::min<std::size_t>(bytes.size(), 65536)));
-  const std::size_t end = head.find("end_header");
-  if (head.rfind("ply", 0) != 0 || end == std::string::npos) throw InputError(where + ": not a PLY file");
-  const std::size_t newline = head.find('\n', end);
-  if (newline == std::string::npos) throw InputError(where + ": PLY header does not end with a line break");
-  const std::size_t data = newline + 1;
-  std::istringstream lines(head.substr(0, end));
-  std::string line;
-  bool ascii = false, format_seen = false;
-  std::vector<Element> elements;
-  while (std::getline(lines, line)) {
-    std::istringstream w(line);
-    std::string word;
-    w >> word;
-    if (word == "format") {
-      std::string format;
-      w >> format;
-      if (format == "ascii") ascii = true;
-      else if (format != "binary_little_endian")
-        throw InputError(where + ": PLY format '" + format + "' is not read (ascii, binary_little_endian)");
-      format_seen = true;
-    } else if (word == "element") {
-      Element e;
-      if (!(w >> e.name >> e.count)) throw InputError(where + ": bad element line '" + line + "'");
-      elements.push_back(e);
-    } else if (word == "property") {
-      if (elements.empty()) throw InputError(where + ": property before any element");
-      Property p;
-      std::string type;
-      w >> type;
-      if (type == "list") {
-        std::string count_type, item_type;
-        w >> count_type >> item_type >> p.name;
-        p.list = true;
-        p.count_type = scalar_type(count_type, where);
-        p.type = scalar_type(item_type, where);
-      } else {
-        w >> p.name;
-        p.type = scalar_type(type, where);
-      }
-      elements.back().properties.push_back(p);
-    }
-  }
-  if (!format_seen) throw InputError(where + ": PLY header has no format line");
+  const PlyHeader header = parse_ply_header(bytes, where);
+  if (header.format == PlyFormat::BinaryBigEndian)
+    throw InputError(where + ": PLY format '" + header.format_name + "' is not read (ascii, binary_little_endian)");
+  const bool ascii = header.format == PlyFormat::Ascii;
 
   Mesh m;
-  ValueReader in(bytes, data, ascii, where);
-  for (const Element& e : elements) {
+  ValueReader in(bytes, header.data_offset, ascii, where);
+  for (const PlyElement& e : header.elements) {
     const bool vertex = e.name == "vertex", face = e.name == "face";
     // Guard the allocations below against counts no file of this size could hold.
     if (e.count > bytes.size()) throw InputError(where + ": element '" + e.name + "' count " + std::to_string(e.count) + " exceeds the file");
     bool has_normals = false, has_region = false;
-    for (const Property& p : e.properties) {
+    for (const PlyProperty& p : e.properties) {
       has_normals |= vertex && (p.name == "nx" || p.name == "ny" || p.name == "nz");
       has_region |= vertex && (p.name == "region" || p.name == "label" || p.name == "segment");
     }
@@ -143,7 +76,7 @@ Mesh read_mesh_ply(const std::filesystem::path& path) {
       if (has_region) m.regions.assign(e.count, 0);
     }
     for (std::uint64_t i = 0; i < e.count; ++i) {
-      for (const Property& p : e.properties) {
+      for (const PlyProperty& p : e.properties) {
         const std::string field = "element '" + e.name + "' " + std::to_string(i) + " property '" + p.name + "'";
         if (p.list) {
           const double n = in.read(p.count_type, field + " count");

@@ -51,11 +51,18 @@ void Scene::check_files(const std::string& source) const {
       if (!std::filesystem::exists(file)) throw InputError(where + ": " + field + " " + file.string() + " does not exist");
       const std::string ext = file.extension().string();
       std::uint32_t w = 0, h = 0;
-      if (ext == ".exr" || ext == ".EXR") {
-        const Image image = read_image(file);
-        w = image.width, h = image.height;
-      } else {
-        std::tie(w, h) = image_size(file);
+      try {
+        if (ext == ".exr" || ext == ".EXR") {
+          const Image image = read_image(file);
+          w = image.width, h = image.height;
+        } else {
+          // Header and last bytes only: a file cut short is found here, before any stage runs, not
+          // when a stage decodes it (stb decodes a truncated JPEG without an error).
+          std::tie(w, h) = image_size(file);
+          require_complete_image(file);
+        }
+      } catch (const InputError& e) {
+        throw InputError(where + ": " + field + " " + e.what());  // e.what() starts with the file
       }
       if (w != c.width || h != c.height)
         throw InputError(where + ": " + field + " " + file.string() + " is " + std::to_string(w) + "x" + std::to_string(h) +

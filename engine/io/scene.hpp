@@ -32,8 +32,9 @@ struct Scene {
   std::optional<double> cm_per_unit;  // when the file declares metric units
   // Throws InputError naming the file and the camera and field that are wrong.
   void validate(const std::string& source) const;
-  // Every camera's image (and mask, when it has one) exists and has the camera's size. Throws
-  // InputError naming the file, the camera and what is wrong. Reads headers only (PNG, JPEG).
+  // Every camera's image (and mask, when it has one) exists, has the camera's size and is complete
+  // (not truncated). Throws InputError naming the file, the camera and what is wrong. Reads a PNG's
+  // or JPEG's header and last bytes only; EXR files are decoded.
   void check_files(const std::string& source) const;
 };
 

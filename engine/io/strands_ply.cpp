@@ -1,11 +1,12 @@
 // Strands as binary little-endian PLY: vertices, the chains as `edge` elements (vertex1, vertex2)
 // that Blender and most tools import, and a `strand` element (first, count, region) that keeps the
-// strands exact for nf_gpu and anyone who reads it.
-#include <charconv>
+// strands exact for nf_gpu and anyone who reads it. The header is parsed by ply_header.cpp, shared
+// with the mesh reader.
 #include <sstream>
 
 #include "engine/core/atomic_file.hpp"
 #include "engine/io/binary_io.hpp"
+#include "engine/io/ply_header.hpp"
 #include "engine/io/strand_files.hpp"
 
 namespace nf::io {
@@ -49,36 +50,23 @@ void write_strands_ply(const std::filesystem::path& path, const StrandSet& s) {
 StrandSet read_strands_ply(const std::filesystem::path& path) {
   const std::string where = path.string();
   const std::vector<char> bytes = read_file_bytes(path);
-  const std::string text(bytes.begin(), bytes.begin() + std::ptrdiff_t(std::min<std::size_t>(bytes.size(), 4096)));
-  const std::size_t end = text.find("end_header\n");
-  if (text.rfind("ply\n", 0) != 0 || end == std::string::npos) throw InputError(where + ": not a PLY file");
-  if (text.find("format binary_little_endian 1.0") == std::string::npos)
+  const PlyHeader header = parse_ply_header(bytes, where);
+  if (header.format != PlyFormat::BinaryLittleEndian)
     throw InputError(where + ": only binary little-endian strand PLY files are read (format line)");
-  // Element counts and the vertex layout, from the header lines.
-  std::istringstream lines(text.substr(0, end));
-  std::string line, current;
+  // Element counts and the layout as "element:type:name" words.
   std::uint64_t vertices = 0, edges = 0, strands = 0;
   bool thick = false, has_strand_element = false;
   std::string layout, order;
-  while (std::getline(lines, line)) {
-    std::istringstream words(line);
-    std::string word;
-    words >> word;
-    if (word == "element") {
-      std::uint64_t count = 0;
-      words >> current >> count;
-      if (!words) throw InputError(where + ": bad element line '" + line + "'");
-      order += current + " ";
-      if (current == "vertex") vertices = count;
-      else if (current == "edge") edges = count;
-      else if (current == "strand") strands = count, has_strand_element = true;
-      else throw InputError(where + ": unexpected element '" + current + "'");
-    } else if (word == "property") {
-      // The layout this reader supports is exactly the one write_strands_ply produces.
-      std::string type, name;
-      words >> type >> name;
-      layout += current + ":" + type + ":" + name + " ";
-      if (current == "vertex" && name == "thickness") thick = true;
+  for (const PlyElement& e : header.elements) {
+    order += e.name + " ";
+    if (e.name == "vertex") vertices = e.count;
+    else if (e.name == "edge") edges = e.count;
+    else if (e.name == "strand") strands = e.count, has_strand_element = true;
+    else throw InputError(where + ": unexpected element '" + e.name + "'");
+    // The layout this reader supports is exactly the one write_strands_ply produces.
+    for (const PlyProperty& p : e.properties) {
+      layout += e.name + ":" + (p.list ? "list" : ply_type_name(p.type)) + ":" + p.name + " ";
+      if (e.name == "vertex" && p.name == "thickness") thick = true;
     }
   }
   const std::string expected =
@@ -88,7 +76,7 @@ StrandSet read_strands_ply(const std::filesystem::path& path) {
     throw InputError(where + ": strand PLY layout is not the one nf_gpu reads (vertex x y z [thickness] as float, "
                              "edge vertex1 vertex2 as int, strand first count as int and region as ushort)");
   ByteReader in(bytes, where);
-  in.seek(end + std::string("end_header\n").size());
+  in.seek(header.data_offset);
   const std::uint64_t stride = thick ? 4 : 3;
   if (vertices > in.remaining() / (4 * stride)) throw InputError(where + ": vertex count " + std::to_string(vertices) + " exceeds the file (truncated?)");
   std::vector<float> raw(vertices * stride);

@@ -8,6 +8,7 @@
 #include <random>
 
 #include "engine/core/error.hpp"
+#include "engine/core/parallel.hpp"
 #include "engine/geometry/feature_index.hpp"
 #include "engine/geometry/point_index.hpp"
 
@@ -69,7 +70,7 @@ void count_matches(const StrandSample& from, const std::vector<float>& from_dirs
     for (int c = 0; c < 3; ++c) features[6 * q + c] = to.xyz[3 * q + c], features[6 * q + 3 + c] = w * to_dirs[3 * q + c];
   const geometry::FeatureIndex index(features, 6);
   std::vector<std::atomic<std::uint64_t>> hits_d(nt), hits_u(nt);
-  geometry::parallel_for(n_from, [&](std::size_t begin, std::size_t end) {
+  parallel_for(n_from, [&](std::size_t begin, std::size_t end) {
     std::vector<std::uint64_t> local_d(nt, 0), local_u(nt, 0);
     for (std::size_t p = begin; p < end; ++p) {
       const float* x = &from.xyz[3 * p];
@@ -211,7 +212,7 @@ ConsistencyMetrics consistency_metrics(const StrandSample& s, double cm_per_unit
     const geometry::PointIndex index(roots);
     const std::uint32_t k = std::min(neighbours, N - 1);
     std::vector<double> local_length(N), local_curv(N), local_dir(N), local_first(N);
-    geometry::parallel_for(N, [&](std::size_t begin, std::size_t end) {
+    parallel_for(N, [&](std::size_t begin, std::size_t end) {
       for (std::size_t i = begin; i < end; ++i) {
         std::vector<std::uint32_t> near = index.nearest_k(&roots[3 * i], k + 1);
         near.erase(std::remove(near.begin(), near.end(), std::uint32_t(i)), near.end());

@@ -5,6 +5,7 @@
 #include <numeric>
 
 #include "engine/core/error.hpp"
+#include "engine/core/parallel.hpp"
 #include "engine/geometry/point_index.hpp"
 #include "engine/geometry/surface_sampling.hpp"
 
@@ -22,7 +23,7 @@ Nearest nearest_to(const std::vector<float>& from, const std::vector<float>& fro
   Nearest n;
   n.distance.resize(from.size() / 3);
   n.alignment.resize(from.size() / 3, 0.0);
-  geometry::parallel_for(from.size() / 3, [&](std::size_t begin, std::size_t end) {
+  parallel_for(from.size() / 3, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       const auto [j, d2] = index.nearest(&from[3 * i]);
       n.distance[i] = std::sqrt(double(d2));
@@ -38,7 +39,7 @@ double mean(const std::vector<double>& v) { return v.empty() ? 0.0 : std::accumu
 
 }  // namespace
 
-SurfaceMetrics surface_metrics(const io::Mesh& mesh, const io::Mesh& reference, double cm_per_unit,
+SurfaceMetrics surface_metrics(const geometry::Mesh& mesh, const geometry::Mesh& reference, double cm_per_unit,
                                double fscore_threshold_mm, std::uint64_t samples, unsigned seed) {
   if (!(cm_per_unit > 0)) throw InputError("metrics: the scene scale (cm per unit) must be positive");
   const auto a = geometry::sample_surface(mesh, samples, seed), b = geometry::sample_surface(reference, samples, seed);
@@ -67,7 +68,7 @@ SurfaceMetrics surface_metrics(const io::Mesh& mesh, const io::Mesh& reference, 
   return m;
 }
 
-TipChamfer tip_chamfer(const StrandSample& strands, const io::Mesh& outer, double cm_per_unit, std::uint64_t samples,
+TipChamfer tip_chamfer(const StrandSample& strands, const geometry::Mesh& outer, double cm_per_unit, std::uint64_t samples,
                        unsigned seed) {
   if (!(cm_per_unit > 0)) throw InputError("metrics: the scene scale (cm per unit) must be positive");
   if (strands.points < 1) throw InputError("tip chamfer: strands have no points");

@@ -20,7 +20,7 @@ struct SurfaceMetrics {
   double fscore_threshold_mm = 0, precision = 0, recall = 0, fscore = 0;  // percent
 };
 
-SurfaceMetrics surface_metrics(const io::Mesh& mesh, const io::Mesh& reference, double cm_per_unit,
+SurfaceMetrics surface_metrics(const geometry::Mesh& mesh, const geometry::Mesh& reference, double cm_per_unit,
                                double fscore_threshold_mm = 5.0, std::uint64_t samples = 100000, unsigned seed = 1);
 
 struct TipChamfer {
@@ -28,7 +28,7 @@ struct TipChamfer {
 };
 
 // Strand tips (last points) against points sampled on the outer surface.
-TipChamfer tip_chamfer(const StrandSample& strands, const io::Mesh& outer, double cm_per_unit,
+TipChamfer tip_chamfer(const StrandSample& strands, const geometry::Mesh& outer, double cm_per_unit,
                        std::uint64_t samples = 100000, unsigned seed = 1);
 
 json to_json(const SurfaceMetrics& metrics);

@@ -8,6 +8,7 @@
 
 #include "engine/core/error.hpp"
 #include "engine/core/log.hpp"
+#include "engine/core/parallel.hpp"
 #include "engine/geometry/distance_transform.hpp"
 #include "engine/geometry/point_index.hpp"
 #include "engine/gpu/context.hpp"
@@ -128,7 +129,7 @@ NeusTrainingData load_neus_training_data(const io::Scene& scene, const VisualHul
   d.rgb.resize(n);
   d.masks.resize(n);
   std::vector<std::uint8_t> usable(n, 0);
-  geometry::for_each_dynamic(int(n), [&](int ci) {
+  for_each_dynamic(int(n), [&](int ci) {
     {
       const std::size_t c = std::size_t(ci);
       const io::Camera& cam = scene.cameras[c];

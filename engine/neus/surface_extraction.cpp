@@ -10,7 +10,7 @@
 
 namespace nf::neus {
 
-io::Mesh extract_surface(const NeusField& field, const Normalisation& norm, const OccupancyGrid& hull, int resolution,
+geometry::Mesh extract_surface(const NeusField& field, const Normalisation& norm, const OccupancyGrid& hull, int resolution,
                          SurfaceGridStats* stats) {
   if (resolution < 8 || resolution > 2048)
     throw InputError("surface extraction: resolution must be in [8, 2048], got " + std::to_string(resolution));
@@ -35,13 +35,13 @@ io::Mesh extract_surface(const NeusField& field, const Normalisation& norm, cons
       }
   const std::vector<float> sdf = field.sdf_at(points);
   for (std::size_t i = 0; i < sdf.size(); ++i) values[where[i]] = std::isfinite(sdf[i]) ? sdf[i] : kOutside;
-  io::Mesh mesh = geometry::marching_cubes_gpu(field.context(), values, dims, glm::vec3(origin), glm::vec3(float(voxel)), 0.f);
+  geometry::Mesh mesh = geometry::marching_cubes_gpu(field.context(), values, dims, glm::vec3(origin), glm::vec3(float(voxel)), 0.f);
   const std::size_t components = geometry::keep_largest_component(mesh);  // normals follow their vertices
   if (stats) *stats = {dims, points.size(), components};
   return mesh;
 }
 
-io::Mesh hull_surface(const OccupancyGrid& hull) {
+geometry::Mesh hull_surface(const OccupancyGrid& hull) {
   const glm::ivec3 dims = hull.dims + 2;  // a layer of empty cells all round closes the surface
   std::vector<float> values(std::size_t(dims.x) * dims.y * dims.z, 1.f);
   for (int k = 0; k < hull.dims.z; ++k)

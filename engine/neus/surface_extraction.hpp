@@ -17,11 +17,11 @@ struct SurfaceGridStats {
   std::uint64_t components = 0;  // connected components before the largest was kept
 };
 
-io::Mesh extract_surface(const NeusField& field, const Normalisation& norm, const OccupancyGrid& hull, int resolution,
+geometry::Mesh extract_surface(const NeusField& field, const Normalisation& norm, const OccupancyGrid& hull, int resolution,
                          SurfaceGridStats* stats = nullptr);
 
 // The occupancy grid's own surface (marching cubes of +-1 at cell centres): the visual hull as a
 // mesh, the baseline the trained surface is compared with.
-io::Mesh hull_surface(const OccupancyGrid& hull);
+geometry::Mesh hull_surface(const OccupancyGrid& hull);
 
 }  // namespace nf::neus

@@ -7,6 +7,7 @@
 
 #include "engine/core/error.hpp"
 #include "engine/core/log.hpp"
+#include "engine/core/parallel.hpp"
 #include "engine/geometry/point_index.hpp"
 #include "engine/io/image.hpp"
 
@@ -114,7 +115,7 @@ std::vector<std::uint8_t> carve(const std::vector<View>& views, glm::dvec3 lo, g
                                 int min_views) {
   std::vector<std::uint8_t> occ(std::size_t(dims.x) * std::size_t(dims.y) * std::size_t(dims.z), 0);
   const CellTest test{views, lo, cell, min_views};
-  geometry::for_each_dynamic(dims.z, [&](int k) {
+  for_each_dynamic(dims.z, [&](int k) {
     for (int j = 0; j < dims.y; ++j)
       for (int i = 0; i < dims.x; ++i) {
         const glm::dvec3 corner0 = lo + glm::dvec3(i, j, k) * cell;
@@ -142,7 +143,7 @@ std::vector<std::uint8_t> carve(const std::vector<View>& views, glm::dvec3 lo, g
   std::vector<std::uint64_t> sole(views.size(), 0), total(views.size(), 0);
   std::uint64_t seen_cells = 0;
   std::mutex mutex;
-  geometry::for_each_dynamic(dims.z, [&](int k) {
+  for_each_dynamic(dims.z, [&](int k) {
     std::vector<std::uint64_t> s(views.size(), 0), t(views.size(), 0);
     std::uint64_t sc = 0;
     for (int j = 0; j < dims.y; ++j)
@@ -268,7 +269,7 @@ OccupancyGrid carve_visual_hull(const io::Scene& scene, const VisualHullOptions&
     throw InputError(source + ": no camera has a mask; the visual hull (and the NeuS stage) needs masks "
                               "(mask_path per frame in transforms.json)");
   std::vector<View> views(masked.size());
-  geometry::for_each_dynamic(int(masked.size()), [&](int vi) {
+  for_each_dynamic(int(masked.size()), [&](int vi) {
     const io::Camera& cam = scene.cameras[masked[std::size_t(vi)]];
     const io::Image image = io::read_image(cam.mask);
     if (image.width != cam.width || image.height != cam.height)

@@ -3,7 +3,7 @@
 // grid the NeuS sampler starts from (rays and samples only where the animal can be, DESIGN §6, §8),
 // and the scene normalisation that maps the hull into the unit sphere NeuS trains in.
 //
-// CPU code (threads over z-slabs via geometry::parallel_for). A GPU version can come later; the
+// CPU code (threads over z-slabs via parallel_for). A GPU version can come later; the
 // carve is a per-voxel, per-camera test with no dependencies, so it maps to one compute kernel.
 #include <cstdint>
 #include <string>

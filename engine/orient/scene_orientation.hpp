@@ -17,7 +17,8 @@ struct SceneOrientationOptions {
   GaborParams gabor;
 };
 
-// Returns the files written. The output folder is created; only <name>.exr / <name>.png are written.
+// Returns the files written. The output folder is created (never inside the scene); only
+// <name>.exr / <name>.png are written, and no file that nf_gpu did not write is replaced.
 std::vector<std::filesystem::path> write_scene_orientations(gpu::Context& context, const SceneOrientationOptions& options);
 
 }  // namespace nf::orient

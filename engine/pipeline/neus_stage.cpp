@@ -6,15 +6,17 @@
 
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/interrupt.hpp"
 #include "engine/core/log.hpp"
 #include "engine/core/progress.hpp"
 #include "engine/gpu/context.hpp"
+#include "engine/io/ground_truth.hpp"
 #include "engine/io/mesh.hpp"
 #include "engine/metrics/surface_metrics.hpp"
-#include "engine/neus/neus_quality.hpp"
+#include "engine/neus/neus_previews.hpp"
 #include "engine/neus/surface_extraction.hpp"
 #include "engine/nn/weights_io.hpp"
-#include "engine/pipeline/neus_previews.hpp"
+#include "engine/pipeline/checkpoint.hpp"
 
 namespace nf::pipeline {
 namespace fs = std::filesystem;
@@ -22,47 +24,8 @@ namespace {
 
 constexpr int kStageVersion = 1;
 
-struct NeusSettings {
-  neus::NeusQuality quality;
-};
-
-NeusSettings settings_of(const StageContext& c) {
-  NeusSettings s{neus::quality_preset(c.quality)};
-  const json overrides = c.settings.value("neus", json::object());
-  neus::NeusTrainingOptions& t = s.quality.training;
-  for (const auto& [key, value] : overrides.items()) {
-    const auto count = [&, k = key, v = value]() -> std::uint32_t {
-      if (!v.is_number_unsigned() || v.get<std::uint64_t>() > 0xffffffffull)
-        throw InputError("neus setting '" + k + "' must be a non-negative integer, got " + v.dump());
-      return v.get<std::uint32_t>();
-    };
-    const auto real = [&, k = key, v = value]() -> float {
-      if (!v.is_number() || !std::isfinite(v.get<double>()))
-        throw InputError("neus setting '" + k + "' must be a number, got " + v.dump());
-      return v.get<float>();
-    };
-    if (key == "steps") t.steps = count();
-    else if (key == "rays") t.rays = count();
-    else if (key == "samples_per_ray") t.samples_per_ray = count();
-    else if (key == "fine_samples") t.fine_samples = count();
-    else if (key == "seed") t.seed = count();
-    else if (key == "hull_fit_steps") t.hull_fit_steps = count();
-    else if (key == "lr") t.lr = real();
-    else if (key == "variance_lr") t.variance_lr = real();
-    else if (key == "sharpness") t.sharpness = real();
-    else if (key == "max_scheduled_inv_s") t.max_scheduled_inv_s = real();
-    else if (key == "colour_weight") t.weights.colour = real();
-    else if (key == "mask_weight") t.weights.mask = real();
-    else if (key == "eikonal_weight") t.eikonal = real();
-    else if (key == "mesh_resolution") s.quality.mesh_resolution = int(count());
-    else if (key == "hull_resolution") s.quality.hull.resolution = int(count());
-    else
-      throw InputError("neus setting '" + key + "' is unknown (steps, rays, samples_per_ray, fine_samples, seed, "
-                       "hull_fit_steps, lr, variance_lr, sharpness, max_scheduled_inv_s, colour_weight, mask_weight, "
-                       "eikonal_weight, mesh_resolution, hull_resolution)");
-  }
-  t.validate();
-  return s;
+neus::NeusQuality settings_of(const StageContext& c) {
+  return neus_settings().resolve(c.quality, c.settings.value("neus", json::object()));
 }
 
 json cameras_json(const io::Scene& scene) {
@@ -82,18 +45,14 @@ json cameras_json(const io::Scene& scene) {
   return cams;
 }
 
-// Ground truth when the scene is an `nf_gpu synth` scene: gt/outer.ply and gt/scene.json.
-json ground_truth_metrics(const StageContext& c, const io::Mesh& mesh, const neus::NeusTrainingData& data) {
-  const fs::path outer = c.scene_dir / "gt" / "outer.ply", info = c.scene_dir / "gt" / "scene.json";
-  if (!fs::exists(outer) || !fs::exists(info) || mesh.triangle_count() == 0) return json();
-  std::ifstream in(info);
-  const json scene = json::parse(in, nullptr, false);
-  if (!scene.is_object() || !scene.contains("cm_per_unit")) return json();
-  const double cm = scene["cm_per_unit"].get<double>();
-  const metrics::SurfaceMetrics m = metrics::surface_metrics(mesh, io::read_mesh(outer), cm);
+// Ground truth when the scene is an `nf_gpu synth` scene: chamfer against its fur envelope.
+json ground_truth_metrics(const StageContext& c, const geometry::Mesh& mesh, const neus::NeusTrainingData& data) {
+  const std::optional<io::GroundTruth> gt = io::find_ground_truth(c.scene_dir);
+  if (!gt || !fs::exists(gt->outer()) || mesh.triangle_count() == 0) return json();
+  const metrics::SurfaceMetrics m = metrics::surface_metrics(mesh, io::read_mesh(gt->outer()), gt->cm_per_unit);
   glm::dvec3 lo, hi;
   data.hull.occupied_bounds(lo, hi);
-  const double diagonal_mm = glm::length(hi - lo) * cm * 10.0, pct = 100.0 * m.chamfer_mean_mm / diagonal_mm;
+  const double diagonal_mm = glm::length(hi - lo) * gt->cm_per_unit * 10.0, pct = 100.0 * m.chamfer_mean_mm / diagonal_mm;
   log::info("neus: chamfer against gt/outer.ply ", m.chamfer_mean_mm, " mm (", pct, " % of the box diagonal)");
   json j = metrics::to_json(m);
   j["box_diagonal_mm"] = diagonal_mm;
@@ -110,58 +69,57 @@ std::vector<fs::path> NeusStage::inputs(const StageContext& c) const {
     if (!cam.image.empty()) files.push_back(cam.image);
     if (!cam.mask.empty()) files.push_back(cam.mask);
   }
-  for (const char* gt : {"gt/outer.ply", "gt/scene.json"})  // synth scenes: metrics.json compares with them
-    if (fs::exists(c.scene_dir / gt)) files.push_back(c.scene_dir / gt);
+  if (const auto gt = io::find_ground_truth(c.scene_dir))  // synth scenes: metrics.json compares with them
+    for (const fs::path& f : {gt->outer(), gt->scene_json()})
+      if (fs::exists(f)) files.push_back(f);
   return files;
 }
 
 json NeusStage::parameters(const StageContext& c) const {
-  const NeusSettings s = settings_of(c);
-  const neus::VisualHullOptions& h = s.quality.hull;
+  const neus::NeusQuality q = settings_of(c);
+  const neus::VisualHullOptions& h = q.hull;
   return {{"stage_version", kStageVersion},
           {"quality", c.quality},
-          {"field", neus::to_json(s.quality.field)},
-          {"training", neus::to_json(s.quality.training)},
+          {"field", neus::to_json(q.field)},
+          {"training", neus::to_json(q.training)},
           {"hull", {h.resolution, h.coarse_resolution, h.dilate_px, h.min_views, h.margin_cells}},
-          {"hold_out_every", s.quality.hold_out_every},
-          {"mesh_resolution", s.quality.mesh_resolution},
+          {"hold_out_every", q.hold_out_every},
+          {"mesh_resolution", q.mesh_resolution},
           {"cameras", cameras_json(c.scene)}};
 }
 
-json NeusStage::run(StageContext& c, const fs::path& out, const fs::path& resume) {
-  const NeusSettings s = settings_of(c);
-  const neus::NeusQuality& q = s.quality;
+json NeusStage::run(StageContext& c, const fs::path& out_dir, const fs::path& resume) {
+  const neus::NeusQuality q = settings_of(c);
+  const NeusOutputs out{out_dir};
   const auto t0 = std::chrono::steady_clock::now();
   const neus::NeusTrainingData data = neus::load_neus_training_data(c.scene, q.hull, q.hold_out_every);
+  if (interrupted()) throw Interrupted("neus: stopped before the first training step; nothing to save");
   log::info("neus: ", data.train_views.size(), " training views, ", data.held_out_views.size(), " held out; ",
             q.training.steps, " steps of ", q.training.rays, " rays x ", q.training.samples_per_ray, " samples");
   auto trainer = std::make_unique<neus::NeusTrainer>(c.gpu, data, q.field, q.training);
   const fs::path checkpoint = resume / "checkpoint.nfwt";
-  if (fs::exists(checkpoint)) {
-    bool resumed = false;
-    try {
-      resumed = trainer->load_checkpoint(checkpoint);
-    } catch (const InputError& e) {
-      log::warn("neus: ", e.what(), "; starting afresh");
-      trainer = std::make_unique<neus::NeusTrainer>(c.gpu, data, q.field, q.training);
-    }
-    if (resumed)
-      log::info("neus: resuming from ", checkpoint.string(), " at step ", trainer->step());
-    else
-      fs::remove(checkpoint);
-  }
+  if (resume_or_discard(
+          "neus", checkpoint, [&] { return trainer->load_checkpoint(checkpoint); },
+          [&] { trainer = std::make_unique<neus::NeusTrainer>(c.gpu, data, q.field, q.training); }))
+    log::info("neus: resuming from ", checkpoint.string(), " at step ", trainer->step());
   Progress progress("neus", q.training.steps);
   trainer->train(q.training.steps, checkpoint, [&](const neus::NeusStepReport& r) {
     char status[160];
     std::snprintf(status, sizeof status, "loss %.4f psnr %.1f inv_s %.0f %.0f rays/s", r.loss, r.psnr, r.inv_s,
                   r.rays_per_second);
     progress.update(r.step, status);
-    return true;
+    return !interrupted();
   });
+  if (interrupted()) {
+    trainer->save_checkpoint(checkpoint);
+    progress.finish("stopped");
+    throw Interrupted("neus: stopped at step " + std::to_string(trainer->step()) + " of " +
+                      std::to_string(q.training.steps) + "; checkpoint saved in " + checkpoint.string());
+  }
   progress.finish();
   std::string curve;
   for (const neus::NeusStepReport& r : trainer->history()) curve += neus::to_json(r).dump() + "\n";
-  write_file_atomic(out / "training.jsonl", curve);
+  write_file_atomic(out.training(), curve);
   const neus::NeusStepReport last = trainer->last_report();
   const double train_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
@@ -173,22 +131,22 @@ json NeusStage::run(StageContext& c, const fs::path& out, const fs::path& resume
     const std::uint64_t n = values.size();
     model.tensors.push_back({name, {n}, std::move(values)});
   }
-  nn::save_weights(out / "model.nfwt", model);
-  write_file_atomic(out / "normalisation.json", neus::to_json(data.norm).dump(2) + "\n");
+  nn::save_weights(out.model(), model);
+  write_file_atomic(out.normalisation(), neus::to_json(data.norm).dump(2) + "\n");
 
   const auto t1 = std::chrono::steady_clock::now();
   neus::SurfaceGridStats grid;
-  const io::Mesh mesh = neus::extract_surface(trainer->field(), data.norm, data.hull, q.mesh_resolution, &grid);
+  const geometry::Mesh mesh = neus::extract_surface(trainer->field(), data.norm, data.hull, q.mesh_resolution, &grid);
   if (mesh.triangle_count() == 0)
     throw InputError("neus: the trained surface is empty (no zero crossing inside the visual hull); check the masks "
                      "and cameras of " + c.scene_dir.string());
-  io::write_mesh_ply(out / "outer.ply", mesh);
+  io::write_mesh_ply(out.outer(), mesh);
   const double mesh_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
 
   const std::vector<std::uint32_t> preview_views =
       data.held_out_views.empty() ? std::vector<std::uint32_t>{data.train_views.front()} : data.held_out_views;
-  const json previews = render_neus_previews(trainer->field(), data, mesh, preview_views,
-                                             trainer->finite_difference_step(), out / "renders");
+  const json previews = neus::render_neus_previews(trainer->field(), data, mesh, preview_views,
+                                             trainer->finite_difference_step(), out.renders());
   json summary{{"steps", trainer->step()},
                {"train_seconds", train_seconds},
                {"mesh_seconds", mesh_seconds},
@@ -203,8 +161,42 @@ json NeusStage::run(StageContext& c, const fs::path& out, const fs::path& resume
                {"peak_device_bytes", c.gpu.peak_allocated_bytes()}};
   const json gt = ground_truth_metrics(c, mesh, data);
   if (!gt.is_null()) summary["ground_truth"] = gt;
-  write_file_atomic(out / "metrics.json", summary.dump(2) + "\n");
+  write_file_atomic(out.metrics(), summary.dump(2) + "\n");
   return summary;
+}
+
+const SettingsSchema<neus::NeusQuality>& neus_settings() {
+  using Q = neus::NeusQuality;
+  static const SettingsSchema<Q> schema = [] {
+    SettingsSchema<Q> s("neus", [](const std::string& quality) { return neus::quality_preset(quality); });
+    s.add("steps", [](Q& q) -> auto& { return q.training.steps; }, 1, 1e8, "training steps")
+        .add("rays", [](Q& q) -> auto& { return q.training.rays; }, 1, 1 << 20, "rays per step")
+        .add("samples_per_ray", [](Q& q) -> auto& { return q.training.samples_per_ray; }, 2, 1024,
+             "samples along each ray (coarse + fine)")
+        .add("fine_samples", [](Q& q) -> auto& { return q.training.fine_samples; }, 0, 1023,
+             "of samples_per_ray, placed by NeuS up-sampling (0: all stratified)")
+        .add("seed", [](Q& q) -> auto& { return q.training.seed; }, 0, 4294967295.0, "random seed (rays, initialisation)")
+        .add("hull_fit_steps", [](Q& q) -> auto& { return q.training.hull_fit_steps; }, 0, 1e6,
+             "steps fitting the SDF to the visual hull before rendering starts")
+        .add("lr", [](Q& q) -> auto& { return q.training.lr; }, 1e-7, 1, "learning rate of the hash grid and MLPs")
+        .add("variance_lr", [](Q& q) -> auto& { return q.training.variance_lr; }, 0, 1, "learning rate of NeuS's variance")
+        .add("sharpness", [](Q& q) -> auto& { return q.training.sharpness; }, 0, 100,
+             "scheduled inv_s >= sharpness / finite-difference step (0: learned variance only)")
+        .add("max_scheduled_inv_s", [](Q& q) -> auto& { return q.training.max_scheduled_inv_s; }, 0, 1e6,
+             "cap of the scheduled inv_s")
+        .add("colour_weight", [](Q& q) -> auto& { return q.training.weights.colour; }, 0, 1e6, "weight of the colour L1 loss")
+        .add("mask_weight", [](Q& q) -> auto& { return q.training.weights.mask; }, 0, 1e6, "weight of the mask BCE loss")
+        .add("eikonal_weight", [](Q& q) -> auto& { return q.training.eikonal; }, 0, 1e6, "weight of the Eikonal loss")
+        .add("checkpoint_interval", [](Q& q) -> auto& { return q.training.checkpoint_interval; }, 0, 1e8,
+             "steps between checkpoints (0: none; Ctrl-C always saves one)")
+        .add("mesh_resolution", [](Q& q) -> auto& { return q.mesh_resolution; }, 8, 2048,
+             "marching-cubes cells along the longest axis of the surface's box")
+        .add("hull_resolution", [](Q& q) -> auto& { return q.hull.resolution; }, 8, 2048,
+             "visual-hull cells along the longest axis of its box")
+        .check([](const Q& q) { q.training.validate(); });
+    return s;
+  }();
+  return schema;
 }
 
 }  // namespace nf::pipeline

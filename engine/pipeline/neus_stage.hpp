@@ -1,17 +1,30 @@
 #pragma once
 // The surface stage (`neus`): visual hull, normalisation, NeuS training with checkpoints, the
-// outer mesh M_NeuS and previews. Writes WORK/neus/: outer.ply (scene units), model.nfwt (the
-// field, with its configuration and the normalisation), normalisation.json, training.jsonl (the
-// loss curve), metrics.json, renders/ (held-out views: rgb, normal, depth PNG and depth EXR).
-// Settings (context.settings["neus"], `--set neus.KEY=VALUE`): steps, rays, samples_per_ray, seed, lr,
-// variance_lr, hull_fit_steps, mesh_resolution, hull_resolution.
+// outer mesh M_NeuS and previews. Its files are NeusOutputs below; its settings are declared in
+// neus_settings() (`nf_gpu reconstruct --help-stage neus` prints them).
+#include "engine/neus/neus_quality.hpp"
 #include "engine/pipeline/stage.hpp"
 
 namespace nf::pipeline {
 
+// What the stage writes into WORK/neus/. Later stages read these paths, never retype them.
+struct NeusOutputs {
+  std::filesystem::path dir;
+  std::filesystem::path outer() const { return dir / "outer.ply"; }               // M_NeuS, scene units
+  std::filesystem::path model() const { return dir / "model.nfwt"; }              // field + config + normalisation
+  std::filesystem::path normalisation() const { return dir / "normalisation.json"; }
+  std::filesystem::path training() const { return dir / "training.jsonl"; }      // the loss curve
+  std::filesystem::path metrics() const { return dir / "metrics.json"; }          // the stage summary
+  std::filesystem::path renders() const { return dir / "renders"; }               // held-out views: rgb, normal, depth
+};
+inline NeusOutputs neus_outputs(const std::filesystem::path& work) { return {work / "neus"}; }
+
+const SettingsSchema<neus::NeusQuality>& neus_settings();
+
 class NeusStage : public Stage {
  public:
   std::string name() const override { return "neus"; }
+  const StageSettings& settings() const override { return neus_settings(); }
   std::vector<std::filesystem::path> inputs(const StageContext& context) const override;
   json parameters(const StageContext& context) const override;
   json run(StageContext& context, const std::filesystem::path& out, const std::filesystem::path& resume) override;

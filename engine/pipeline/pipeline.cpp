@@ -1,13 +1,16 @@
 #include "engine/pipeline/pipeline.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <ctime>
 #include <fstream>
+#include <set>
 
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/content_hash.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/log.hpp"
+#include "engine/core/text.hpp"
 
 namespace nf::pipeline {
 namespace fs = std::filesystem;
@@ -48,28 +51,95 @@ std::string now_utc() {
   return buf;
 }
 
+// The stages' declared graph: names, and for each the indices of the stages it reads.
+struct StageGraph {
+  std::vector<std::string> names;
+  std::vector<std::vector<std::size_t>> deps;
+
+  std::size_t index_of(const std::string& name, const std::string& option) const {
+    for (std::size_t i = 0; i < names.size(); ++i)
+      if (names[i] == name) return i;
+    throw UsageError(option + ": no stage named '" + name + "'" + did_you_mean(name, names) + " (stages: " +
+                     join(names) + ")");
+  }
+  // `to` and everything it depends on; every stage when `to` is empty.
+  std::set<std::size_t> needed_for(const std::string& to) const {
+    std::set<std::size_t> out;
+    if (to.empty()) {
+      for (std::size_t i = 0; i < names.size(); ++i) out.insert(i);
+      return out;
+    }
+    std::vector<std::size_t> todo{index_of(to, "--to")};
+    while (!todo.empty()) {
+      const std::size_t i = todo.back();
+      todo.pop_back();
+      if (out.insert(i).second) todo.insert(todo.end(), deps[i].begin(), deps[i].end());
+    }
+    return out;
+  }
+  // `from` and every stage that depends on it, directly or not; none when `from` is empty.
+  std::set<std::size_t> forced_by(const std::string& from) const {
+    std::set<std::size_t> out;
+    if (from.empty()) return out;
+    out.insert(index_of(from, "--from"));
+    for (std::size_t i = 0; i < names.size(); ++i)  // stages are listed after what they read
+      for (const std::size_t d : deps[i])
+        if (out.count(d)) out.insert(i);
+    return out;
+  }
+};
+
+StageGraph stage_graph(const std::vector<std::unique_ptr<Stage>>& stages) {
+  StageGraph g;
+  for (const auto& s : stages) {
+    std::vector<std::size_t> deps;
+    for (const std::string& d : s->depends_on()) {
+      const auto it = std::find(g.names.begin(), g.names.end(), d);
+      NF_CHECK(it != g.names.end(), "stage " + s->name() + " depends on '" + d + "', which is not listed before it");
+      deps.push_back(std::size_t(it - g.names.begin()));
+    }
+    g.names.push_back(s->name());
+    g.deps.push_back(std::move(deps));
+  }
+  return g;
+}
+
+// An input that is missing: under WORK/<stage>/ it is that stage's output, so say to run it.
+void require_inputs(const Stage& stage, const StageContext& c, const StageGraph& graph) {
+  for (const fs::path& p : stage.inputs(c)) {
+    if (fs::exists(p)) continue;
+    const fs::path rel = fs::weakly_canonical(p).lexically_relative(fs::weakly_canonical(c.work));
+    if (!rel.empty() && *rel.begin() != "..") {
+      const std::string owner = rel.begin()->string();
+      if (std::find(graph.names.begin(), graph.names.end(), owner) != graph.names.end())
+        throw InputError("stage " + stage.name() + " needs " + p.string() + ", which is missing: rerun stage " + owner +
+                         " (nf_gpu reconstruct ... --from " + owner + ")");
+    }
+    throw InputError("stage " + stage.name() + " needs " + p.string() + ", which is missing");
+  }
+}
+
 }  // namespace
 
 fs::path stage_record(const fs::path& work, const std::string& stage) { return work / stage / "stage.json"; }
 
 std::vector<StageOutcome> run_pipeline(const std::vector<std::unique_ptr<Stage>>& stages, StageContext& c,
                                        const RunOptions& options) {
-  std::string names;
-  bool from_found = options.from.empty(), to_found = options.to.empty();
-  for (const auto& s : stages) {
-    names += (names.empty() ? "" : ", ") + s->name();
-    from_found |= s->name() == options.from;
-    to_found |= s->name() == options.to;
-  }
-  if (!from_found) throw UsageError("--from: no stage named '" + options.from + "' (stages: " + names + ")");
-  if (!to_found) throw UsageError("--to: no stage named '" + options.to + "' (stages: " + names + ")");
+  const StageGraph graph = stage_graph(stages);
+  const std::set<std::size_t> needed = graph.needed_for(options.to);
+  const std::set<std::size_t> forced = graph.forced_by(options.from);
+  if (!options.from.empty() && !needed.count(graph.index_of(options.from, "--from")))
+    throw UsageError("--from " + options.from + ": stage " + options.to + " (--to) does not depend on it");
   fs::create_directories(c.work);
 
   std::vector<StageOutcome> outcomes;
-  bool forced = false;
-  for (const auto& stage : stages) {
-    const std::string name = stage->name();
-    forced |= name == options.from;
+  std::set<std::string> ran;
+  for (std::size_t i = 0; i < stages.size(); ++i) {
+    if (!needed.count(i)) continue;
+    const Stage& stage = *stages[i];
+    const std::string name = stage.name();
+    bool force = forced.count(i) > 0;
+    for (const std::string& d : stage.depends_on()) force |= ran.count(d) > 0;  // its inputs were remade
     const fs::path dir = c.work / name, record = stage_record(c.work, name);
     const fs::path partial = c.work / (name + ".partial"), old = c.work / (name + ".old");
     const fs::path resume = c.work / ".resume" / name;
@@ -81,21 +151,20 @@ std::vector<StageOutcome> run_pipeline(const std::vector<std::unique_ptr<Stage>>
     if (fs::exists(dir) && !fs::exists(record))
       throw InputError(dir.string() + " exists but holds no stage.json, so nf_gpu did not write it; move it away or "
                                       "choose another --out");
-    const json key = stage_key(*stage, c);
+    require_inputs(stage, c, graph);
+    const json key = stage_key(stage, c);
     StageOutcome outcome;
     outcome.name = name;
-    if (!forced && fs::exists(record)) {
+    if (!force && fs::exists(record)) {
       const json previous = read_json(record);
       if (previous.is_object() && previous.value("key", json()) == key) {
         outcome.summary = previous.value("summary", json::object());
         log::info("stage ", name, ": unchanged since ", previous.value("finished", std::string("?")), ", skipped");
         for (const fs::path& leftover : {partial, old, resume}) fs::remove_all(leftover);  // a kill's leftovers
         outcomes.push_back(outcome);
-        if (name == options.to) break;
         continue;
       }
     }
-    forced = true;  // a stage that reruns makes every later one rerun: their inputs may change
 
     fs::remove_all(partial);
     fs::create_directories(partial);
@@ -106,9 +175,14 @@ std::vector<StageOutcome> run_pipeline(const std::vector<std::unique_ptr<Stage>>
     fs::create_directories(resume);
     write_file_atomic(resume / "key.json", key.dump(2) + "\n");
 
-    log::info("stage ", name, ": running");
+    log::info("stage ", name, ": running", fs::exists(record) ? "" : " (no result yet)");
     const auto start = std::chrono::steady_clock::now();
-    outcome.summary = stage->run(c, partial, resume);
+    try {
+      outcome.summary = stages[i]->run(c, partial, resume);
+    } catch (...) {
+      fs::remove_all(partial);  // half an output is no output; the checkpoint in `resume` stays
+      throw;
+    }
     outcome.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     outcome.ran = true;
     write_file_atomic(partial / "stage.json", json{{"stage", name},
@@ -125,7 +199,7 @@ std::vector<StageOutcome> run_pipeline(const std::vector<std::unique_ptr<Stage>>
     fs::remove_all(resume);
     log::info("stage ", name, ": done in ", outcome.seconds, " s");
     outcomes.push_back(outcome);
-    if (name == options.to) break;
+    ran.insert(name);
   }
   return outcomes;
 }

@@ -1,7 +1,10 @@
 #pragma once
-// The stage framework of `nf_gpu reconstruct`. For each stage in order:
+// The stage framework of `nf_gpu reconstruct`. Stages are listed after the stages they depend on
+// (Stage::depends_on); for each stage needed (all, or --to and what it depends on), in order:
 //   key = its parameters + the content hashes of its inputs;
-//   skip when WORK/<name>/stage.json holds the same key (and no --from forces it);
+//   a missing input under WORK/<other>/ is an InputError that says to run <other>;
+//   skip when WORK/<name>/stage.json holds the same key, unless --from names it or a stage it
+//   depends on (directly or not), or a stage it depends on ran in this run;
 //   else run into WORK/<name>.partial, write stage.json there, and swap it in for WORK/<name>
 //   (the old folder is removed only after the new one is complete);
 //   checkpoints live in WORK/.resume/<name>, kept across kills, tied to the key, removed on success.
@@ -15,8 +18,8 @@
 namespace nf::pipeline {
 
 struct RunOptions {
-  std::string from;  // rerun this stage and every later one even when unchanged ("" = none)
-  std::string to;    // stop after this stage ("" = run to the end)
+  std::string from;  // rerun this stage and every stage that depends on it, even when unchanged ("" = none)
+  std::string to;    // run only this stage and the stages it depends on ("" = all)
 };
 
 struct StageOutcome {
@@ -26,7 +29,9 @@ struct StageOutcome {
   json summary;
 };
 
-// Throws UsageError for an unknown --from/--to, InputError for a foreign WORK/<name> folder.
+// Throws UsageError for an unknown --from/--to (or a --from that --to does not depend on),
+// InputError for a foreign WORK/<name> folder or a missing input. A stage that throws leaves no
+// WORK/<name>.partial behind; its checkpoint stays for the next run.
 std::vector<StageOutcome> run_pipeline(const std::vector<std::unique_ptr<Stage>>& stages, StageContext& context,
                                        const RunOptions& options);
 

@@ -9,6 +9,7 @@
 
 #include "engine/core/json.hpp"
 #include "engine/io/scene.hpp"
+#include "engine/pipeline/settings.hpp"
 
 namespace nf::gpu {
 class Context;
@@ -29,14 +30,19 @@ class Stage {
  public:
   virtual ~Stage() = default;
   virtual std::string name() const = 0;
-  // Stages whose outputs this one reads (they run first).
+  // Stages whose outputs this one reads: they run (or are found unchanged) first, and a rerun of
+  // one of them reruns this one.
   virtual std::vector<std::string> depends_on() const { return {}; }
+  // The stage's `--set` settings; validated for every stage before any stage runs.
+  virtual const StageSettings& settings() const = 0;
   // Files read (scene files, or earlier stages' outputs under WORK); their content is hashed.
+  // A missing file under WORK/<stage>/ is reported as "run stage <stage>".
   virtual std::vector<std::filesystem::path> inputs(const StageContext& context) const = 0;
   // Everything else that changes the result (settings, camera parameters, a version).
   virtual json parameters(const StageContext& context) const = 0;
   // Writes the outputs into `out` (a fresh folder that becomes WORK/<name> when this returns).
   // `resume` survives a killed run (checkpoints) and is emptied once the stage has finished.
+  // A stage with checkpoints polls nf::interrupted() (Ctrl-C), saves one and throws Interrupted.
   // Returns a summary for the stage record: what it cost and what it achieved.
   virtual json run(StageContext& context, const std::filesystem::path& out, const std::filesystem::path& resume) = 0;
 };

@@ -1,6 +1,10 @@
 #include "engine/pipeline/stages.hpp"
 
+#include <algorithm>
+
 #include "engine/core/error.hpp"
+#include "engine/core/output_guard.hpp"
+#include "engine/core/text.hpp"
 #include "engine/pipeline/neus_stage.hpp"
 
 namespace nf::pipeline {
@@ -24,27 +28,56 @@ void apply_setting(json& settings, const std::string& assignment) {
   settings[stage][key] = value;
 }
 
+json check_reconstruct_options(const std::vector<std::unique_ptr<Stage>>& stages, const ReconstructOptions& options) {
+  const auto& qualities = quality_names();
+  if (std::find(qualities.begin(), qualities.end(), options.quality) == qualities.end())
+    throw UsageError("--quality must be one of " + join(qualities) + ", got '" + options.quality + "'" +
+                     did_you_mean(options.quality, qualities));
+  std::vector<std::string> names;
+  for (const auto& s : stages) names.push_back(s->name());
+  for (const auto& [option, stage] : {std::pair{"--from", options.run.from}, std::pair{"--to", options.run.to}})
+    if (!stage.empty() && std::find(names.begin(), names.end(), stage) == names.end())
+      throw UsageError(std::string(option) + ": no stage named '" + stage + "'" + did_you_mean(stage, names) +
+                       " (stages: " + join(names) + ")");
+  json settings = json::object();
+  for (const std::string& s : options.settings) apply_setting(settings, s);
+  for (const auto& [stage, values] : settings.items()) {
+    const auto it = std::find(names.begin(), names.end(), stage);
+    if (it == names.end())
+      throw UsageError("--set " + stage + ".*: no stage named '" + stage + "'" + did_you_mean(stage, names) +
+                       " (stages: " + join(names) + ")");
+  }
+  for (const auto& s : stages) s->settings().values(options.quality, settings.value(s->name(), json::object()));
+
+  if (!fs::exists(options.scene)) throw InputError("--scene " + options.scene.string() + ": no such file or folder");
+  require_folder_or_absent(options.work, "--out");
+  const fs::path scene_abs = fs::absolute(options.scene);
+  refuse_output_inside(options.work, fs::is_directory(scene_abs) ? scene_abs : scene_abs.parent_path(), "--out", "scene");
+  return settings;
+}
+
 std::vector<StageOutcome> reconstruct(gpu::Context& context, const ReconstructOptions& options) {
-  if (options.quality != "draft" && options.quality != "default" && options.quality != "paper")
-    throw UsageError("--quality must be draft, default or paper, got '" + options.quality + "'");
-  if (!fs::exists(options.scene)) throw InputError(options.scene.string() + ": no such scene");
+  const auto stages = reconstruction_stages();
+  json settings = check_reconstruct_options(stages, options);
   const fs::path scene_abs = fs::absolute(options.scene);
   const fs::path scene_dir = fs::is_directory(scene_abs) ? scene_abs : scene_abs.parent_path();
-  const fs::path work = fs::weakly_canonical(options.work), root = fs::weakly_canonical(scene_dir);
-  const fs::path rel = work.lexically_relative(root);
-  if (!rel.empty() && *rel.begin() != "..")
-    throw UsageError("--out " + options.work.string() + " lies inside the scene folder " + scene_dir.string() +
-                     "; the input is never written, choose a folder outside it");
-  StageContext c{context, scene_dir, io::read_scene(options.scene), options.work, options.quality};
+  StageContext c{context, scene_dir, io::read_scene(options.scene), options.work, options.quality, std::move(settings)};
   c.scene.check_files(options.scene.string());
-  for (const std::string& s : options.settings) apply_setting(c.settings, s);
-  const auto stages = reconstruction_stages();
-  for (const auto& [stage, values] : c.settings.items()) {
-    bool known = false;
-    for (const auto& s : stages) known |= s->name() == stage;
-    if (!known) throw UsageError("--set: no stage named '" + stage + "'");
-  }
   return run_pipeline(stages, c, options.run);
+}
+
+std::vector<std::string> stage_names() {
+  std::vector<std::string> names;
+  for (const auto& s : reconstruction_stages()) names.push_back(s->name());
+  return names;
+}
+
+std::string describe_stage_settings(const std::string& stage, bool markdown) {
+  for (const auto& s : reconstruction_stages())
+    if (s->name() == stage) return describe_settings(s->settings(), markdown);
+  const std::vector<std::string> names = stage_names();
+  throw UsageError("--help-stage: no stage named '" + stage + "'" + did_you_mean(stage, names) + " (stages: " +
+                   join(names) + ")");
 }
 
 }  // namespace nf::pipeline

@@ -19,11 +19,23 @@ struct ReconstructOptions {
   std::vector<std::string> settings;  // "stage.key=value", e.g. "neus.steps=300"
 };
 
-// Reads the scene (any format io::read_scene takes), refuses a WORK inside the scene folder (the
-// input is never written), and runs the stages. InputError/UsageError name the bad argument.
+// Checks everything a run can check before it starts, and touches no file: the quality, --from
+// and --to, every --set (unknown stage or key with a "did you mean", type, range, the stages'
+// own cross-checks), --out (not a file, not inside the scene folder). Returns the settings as
+// {"stage": {"key": value}}. UsageError (exit 2) or InputError (exit 1) name what is wrong.
+json check_reconstruct_options(const std::vector<std::unique_ptr<Stage>>& stages, const ReconstructOptions& options);
+
+// check_reconstruct_options, then reads the scene (any format io::read_scene takes) and checks its
+// files (sizes, truncation) before any stage runs, then runs the stages.
 std::vector<StageOutcome> reconstruct(gpu::Context& context, const ReconstructOptions& options);
 
 // Adds one "stage.key=value" override (value parsed as JSON, else kept as a string).
 void apply_setting(json& settings, const std::string& assignment);
+
+// For `--help-stage`: the stage's settings table (markdown for the README), or UsageError naming
+// the stages when there is no such stage.
+std::string describe_stage_settings(const std::string& stage, bool markdown);
+// "neus, body, ..." in order, for help texts.
+std::vector<std::string> stage_names();
 
 }  // namespace nf::pipeline

@@ -14,7 +14,7 @@
 
 namespace nf::synth {
 
-Envelope fur_envelope(const io::Mesh& body, const io::StrandSet& strands, const EnvelopeOptions& options) {
+Envelope fur_envelope(const geometry::Mesh& body, const io::StrandSet& strands, const EnvelopeOptions& options) {
   if (body.vertex_count() == 0) throw InputError("fur envelope: the body mesh is empty");
   glm::vec3 lo(1e30f), hi(-1e30f);
   auto grow = [&](const std::vector<float>& xyz) {

@@ -16,10 +16,10 @@ struct EnvelopeOptions {
 };
 
 struct Envelope {
-  io::Mesh mesh;
+  geometry::Mesh mesh;
   float voxel = 0, closing_radius = 0;
 };
 
-Envelope fur_envelope(const io::Mesh& body, const io::StrandSet& strands, const EnvelopeOptions& options = {});
+Envelope fur_envelope(const geometry::Mesh& body, const io::StrandSet& strands, const EnvelopeOptions& options = {});
 
 }  // namespace nf::synth

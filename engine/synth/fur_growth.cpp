@@ -5,6 +5,7 @@
 #include <random>
 
 #include "engine/core/error.hpp"
+#include "engine/core/parallel.hpp"
 #include "engine/geometry/point_index.hpp"
 
 namespace nf::synth {
@@ -15,8 +16,8 @@ namespace {
 
 constexpr float kPi = 3.14159265358979f;
 
-glm::vec3 vertex(const io::Mesh& m, std::uint32_t i) { return {m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]}; }
-glm::vec3 normal(const io::Mesh& m, std::uint32_t i) { return {m.normals[3 * i], m.normals[3 * i + 1], m.normals[3 * i + 2]}; }
+glm::vec3 vertex(const geometry::Mesh& m, std::uint32_t i) { return {m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]}; }
+glm::vec3 normal(const geometry::Mesh& m, std::uint32_t i) { return {m.normals[3 * i], m.normals[3 * i + 1], m.normals[3 * i + 2]}; }
 
 glm::vec3 any_perpendicular(glm::vec3 n) {
   const glm::vec3 a = std::fabs(n.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
@@ -34,9 +35,9 @@ struct Root {
 
 // Keeps a point at least `height` above the skin, judged by the nearest body vertex's normal.
 struct SkinGuard {
-  const io::Mesh& body;
+  const geometry::Mesh& body;
   geometry::PointIndex index;
-  explicit SkinGuard(const io::Mesh& b) : body(b), index(b.positions) {}
+  explicit SkinGuard(const geometry::Mesh& b) : body(b), index(b.positions) {}
   glm::vec3 push_out(glm::vec3 p, float height) const {
     const float q[3] = {p.x, p.y, p.z};
     const auto [i, d2] = index.nearest(q);
@@ -74,7 +75,7 @@ void set_length(std::vector<glm::vec3>& p, float length) {
 
 }  // namespace
 
-Fur grow_fur(const io::Mesh& body, const knowledge::Knowledge& knowledge, const FurStyle& style, const GrowOptions& o) {
+Fur grow_fur(const geometry::Mesh& body, const knowledge::Knowledge& knowledge, const FurStyle& style, const GrowOptions& o) {
   body.validate("body mesh");
   if (body.normals.empty() || body.regions.empty()) throw InputError("body mesh: fur growth needs per-vertex normals and regions");
   if (o.points_per_strand < 2) throw UsageError("points per strand must be at least 2");
@@ -146,7 +147,7 @@ Fur grow_fur(const io::Mesh& body, const knowledge::Knowledge& knowledge, const 
     d.color = 1.0f + 0.12f * std::clamp(gauss(rng), -2.0f, 2.0f);
   }
 
-  geometry::parallel_for(n, [&](std::size_t s0, std::size_t s1) {
+  parallel_for(n, [&](std::size_t s0, std::size_t s1) {
     std::vector<glm::vec3> p(L);
     for (std::size_t s = s0; s < s1; ++s) {
       const Root& root = roots[s];
@@ -211,7 +212,7 @@ Fur grow_fur(const io::Mesh& body, const knowledge::Knowledge& knowledge, const 
     }
     const geometry::PointIndex index(centre_roots);
     const std::vector<float> before = fur.strands.points;
-    geometry::parallel_for(n, [&](std::size_t s0, std::size_t s1) {
+    parallel_for(n, [&](std::size_t s0, std::size_t s1) {
       std::vector<glm::vec3> p(L);
       for (std::size_t s = s0; s < s1; ++s) {
         const float* mine = &before[s * L * 3];

@@ -35,6 +35,6 @@ struct Fur {
 // `body` carries normals and per-vertex regions (world / scene units). Roots are spread with a
 // density inversely proportional to the region's length, so short fur is denser and the coat
 // covers evenly. Throws InputError when no region of the body grows fur.
-Fur grow_fur(const io::Mesh& body, const knowledge::Knowledge& knowledge, const FurStyle& style, const GrowOptions& options);
+Fur grow_fur(const geometry::Mesh& body, const knowledge::Knowledge& knowledge, const FurStyle& style, const GrowOptions& options);
 
 }  // namespace nf::synth

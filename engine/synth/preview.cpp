@@ -1,13 +1,13 @@
 #include "engine/synth/preview.hpp"
 
 #include <algorithm>
-#include <cctype>
 #include <chrono>
 #include <cmath>
-#include <map>
 
+#include "engine/core/output_guard.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/log.hpp"
+#include "engine/core/parallel.hpp"
 #include "engine/core/progress.hpp"
 #include "engine/geometry/mesh_tools.hpp"
 #include "engine/geometry/point_index.hpp"
@@ -15,6 +15,7 @@
 #include "engine/io/mesh.hpp"
 #include "engine/io/scene.hpp"
 #include "engine/io/strand_files.hpp"
+#include "engine/io/view_names.hpp"
 #include "engine/synth/strand_renderer.hpp"
 
 namespace nf::synth {
@@ -32,16 +33,8 @@ glm::vec3 palette_color(std::int64_t region) {
   return p[std::size_t(region)];
 }
 
-std::string file_safe(const std::string& name) {
-  std::string s = name.empty() ? std::string("camera") : name;
-  for (char& c : s)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '_')) c = '_';
-  if (s == "." || s == "..") s = "camera";
-  return s;
-}
-
 // 0.5 x the median over cameras of depth(animal centre) / focal length, in scene units.
-float default_radius(const io::Scene& scene, const io::Mesh& mesh) {
+float default_radius(const io::Scene& scene, const geometry::Mesh& mesh) {
   glm::dvec3 lo(1e300), hi(-1e300);
   for (std::size_t i = 0; i < mesh.vertex_count(); ++i)
     for (int c = 0; c < 3; ++c) {
@@ -96,8 +89,10 @@ PreviewResult render_previews(const PreviewOptions& o) {
 
   const io::Scene scene = io::read_scene(o.scene);
   scene.validate(o.scene.string());
+  refuse_output_inside(o.out, scene.root, "--out", "scene");
+  require_folder_or_absent(o.out, "--out");
   const std::vector<std::uint32_t> views = io::parse_view_list(o.views, scene.cameras.size());
-  io::Mesh mesh = io::read_mesh(o.mesh);
+  geometry::Mesh mesh = io::read_mesh(o.mesh);
   mesh.validate(o.mesh.string());
   if (mesh.triangle_count() == 0) throw InputError(o.mesh.string() + ": the body mesh has no triangles");
   const io::StrandSet strands = io::read_strands(o.strands);
@@ -115,7 +110,7 @@ PreviewResult render_previews(const PreviewOptions& o) {
   } else if (!mesh.regions.empty() && mesh.vertex_count() > 0) {
     result.coloring = "nearest body vertex region";
     const geometry::PointIndex index(mesh.positions);
-    geometry::parallel_for(n, [&](std::size_t s0, std::size_t s1) {
+    parallel_for(n, [&](std::size_t s0, std::size_t s1) {
       for (std::size_t s = s0; s < s1; ++s) {
         if (strands.points_in(std::uint32_t(s)) == 0) continue;
         const float* root = &strands.points[3 * std::size_t(strands.offsets[s])];
@@ -134,19 +129,13 @@ PreviewResult render_previews(const PreviewOptions& o) {
   const StrandRenderer renderer(mesh, body_look, strands, look, render_options);
 
   // File names: file-safe camera names, made unique with the camera index.
-  std::map<std::string, int> uses;
-  for (const std::uint32_t v : views) ++uses[file_safe(scene.cameras[v].name)];
-  std::error_code ec;
-  fs::create_directories(o.out, ec);
-  if (ec || !fs::is_directory(o.out))
-    throw InputError("--out " + o.out.string() + ": cannot create the folder" + (ec ? " (" + ec.message() + ")" : ""));
+  const std::vector<std::string> names = io::view_file_names(scene, views);
+  OutputFolder folder(o.out);
   Progress progress("render", views.size());
   for (std::size_t i = 0; i < views.size(); ++i) {
     const io::Camera& cam = scene.cameras[views[i]];
-    std::string name = file_safe(cam.name);
-    if (uses[name] > 1) name += "_" + std::to_string(views[i]);
     const Rendered r = renderer.render(cam);
-    const fs::path file = o.out / (name + ".png");
+    const fs::path file = folder.claim(names[i] + ".png");
     io::write_png(file, r.rgb);
     result.files.push_back(file);
     progress.update(i + 1);

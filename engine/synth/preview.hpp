@@ -12,7 +12,8 @@
 // of the scene (cameras that see the centre behind them are skipped), so the radius does not depend
 // on the views chosen. A strand is thus about one pixel wide at the animal.
 // Output: `<out>/<camera name>.png` (sRGB, the camera's size), each written atomically; the folder
-// is created when missing and nothing else in it is touched. Names are made file-safe (characters
+// is created when missing, is never inside the scene folder, and no file in it that nf_gpu did not
+// write is replaced. Names are made file-safe (characters
 // other than letters, digits, '.', '-' and '_' become '_'); a name shared by several cameras gets
 // the camera index appended.
 #include <array>

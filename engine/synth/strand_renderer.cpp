@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "engine/core/error.hpp"
+#include "engine/core/parallel.hpp"
 #include "engine/geometry/point_index.hpp"
 
 namespace nf::synth {
@@ -36,7 +37,7 @@ struct Light {
 struct StrandRenderer::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
-  io::Mesh body;
+  geometry::Mesh body;
   std::vector<glm::vec3> body_colors;
   std::vector<glm::vec4> curve_points;  // xyz radius, render_points per strand
   std::vector<glm::vec3> strand_colors;
@@ -88,7 +89,7 @@ struct StrandRenderer::Impl {
   }
 };
 
-StrandRenderer::StrandRenderer(const io::Mesh& body, const BodyLook& body_look, const io::StrandSet& strands,
+StrandRenderer::StrandRenderer(const geometry::Mesh& body, const BodyLook& body_look, const io::StrandSet& strands,
                                const StrandLook& look, const RenderOptions& options)
     : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
@@ -120,7 +121,7 @@ StrandRenderer::StrandRenderer(const io::Mesh& body, const BodyLook& body_look, 
     const std::uint32_t rp = std::max<std::uint32_t>(2, options.render_points);
     m.points_per_strand = rp;
     m.curve_points.resize(std::size_t(n) * rp);
-    geometry::parallel_for(n, [&](std::size_t s0, std::size_t s1) {
+    parallel_for(n, [&](std::size_t s0, std::size_t s1) {
       for (std::size_t s = s0; s < s1; ++s) {
         const std::uint32_t first = strands.offsets[s], count = strands.offsets[s + 1] - first;
         for (std::uint32_t k = 0; k < rp; ++k) {
@@ -162,7 +163,7 @@ Rendered StrandRenderer::render(const io::Camera& camera) const {
   const glm::dmat4& c2w = camera.camera_to_world;
   const glm::vec3 origin(c2w[3]);
   const glm::mat3 rot(c2w);
-  geometry::parallel_for(h, [&](std::size_t y0, std::size_t y1) {
+  parallel_for(h, [&](std::size_t y0, std::size_t y1) {
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     for (std::size_t y = y0; y < y1; ++y)

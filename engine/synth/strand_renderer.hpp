@@ -40,7 +40,7 @@ struct Rendered {
 // The body may be empty (no triangles): then only the strands are traced.
 class StrandRenderer {
  public:
-  StrandRenderer(const io::Mesh& body, const BodyLook& body_look, const io::StrandSet& strands, const StrandLook& look,
+  StrandRenderer(const geometry::Mesh& body, const BodyLook& body_look, const io::StrandSet& strands, const StrandLook& look,
                  const RenderOptions& options);
   ~StrandRenderer();
   StrandRenderer(const StrandRenderer&) = delete;

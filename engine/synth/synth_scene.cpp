@@ -88,7 +88,7 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
   // A yaw and an offset so the world frame differs from the animal frame.
   params.animal_to_world = glm::translate(glm::mat4(1.0f), 0.1f * proportions.torso_length * glm::vec3(u(rng), 0, u(rng))) *
                            glm::rotate(glm::mat4(1.0f), 3.14159265f * u(rng), glm::vec3(0, 1, 0));
-  const io::Mesh bald = body::pose_body(model, params);
+  const geometry::Mesh bald = body::pose_body(model, params);
   const body::EyeCentres eyes = body::eye_centres(model, params);
   timings["body_s"] = clock.lap();
   log::write(log::Level::Info, "synth: " + o.animal + " body, " + std::to_string(bald.vertex_count()) + " vertices");

@@ -44,7 +44,7 @@ TEST_CASE("every animal's template is a closed manifold with valid skinning") {
     CAPTURE(animal);
     const BodyModel& m = model_of(animal);
     CHECK_NOTHROW(m.validate(animal));
-    io::Mesh mesh;
+    geometry::Mesh mesh;
     mesh.positions = m.template_vertices;
     mesh.triangles = m.triangles;
     CHECK(geometry::is_closed_manifold(mesh));
@@ -106,7 +106,7 @@ TEST_CASE("blend shapes are exact and move the part they name") {
   const BodyModel& m = model_of("cat");
   const std::size_t n = m.vertex_count();
   // Zero shape and zero pose reproduce the template.
-  const io::Mesh rest = pose_body_animal_frame(m, BodyParams{});
+  const geometry::Mesh rest = pose_body_animal_frame(m, BodyParams{});
   for (std::size_t i = 0; i < 3 * n; ++i) REQUIRE(std::fabs(rest.positions[i] - m.template_vertices[i]) < 1e-5f);
 
   const auto index_of = [&](const std::string& name) {
@@ -155,7 +155,7 @@ TEST_CASE("skinning: turning the head moves the face rigidly and leaves the rump
   BodyParams params;
   params.joint_rotations.assign(m.joint_count(), glm::vec3(0));
   params.joint_rotations[std::size_t(m.joint_index("head"))] = glm::vec3(0, 1.2f, 0);  // ~69 degrees yaw
-  const io::Mesh posed = pose_body_animal_frame(m, params);
+  const geometry::Mesh posed = pose_body_animal_frame(m, params);
   double rump = 0, face = 0;
   int nr = 0, nf = 0;
   std::vector<std::size_t> nose;
@@ -176,7 +176,7 @@ TEST_CASE("skinning: turning the head moves the face rigidly and leaves the rump
   params.scale = 2.0f;
   params.animal_to_world = glm::mat4(1.0f);
   params.animal_to_world[3] = glm::vec4(1, 2, 3, 1);
-  const io::Mesh world = pose_body(m, params);
+  const geometry::Mesh world = pose_body(m, params);
   for (std::size_t i = 0; i < m.vertex_count(); i += 97)
     CHECK(glm::distance(at(world.positions, i), 2.0f * at(posed.positions, i) + glm::vec3(1, 2, 3)) < 1e-4f);
 }

@@ -1,13 +1,17 @@
 // The nf_gpu command line as a user runs it: outputs, JSON records and exit codes.
 #include <doctest/doctest.h>
 
+#include <signal.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <set>
 #include <string>
+#include <thread>
 
 #include "engine/core/json.hpp"
 #include "engine/io/mesh.hpp"
@@ -30,6 +34,37 @@ Result run(const std::string& args, const std::string& env = "") {
   const int status = pclose(pipe);
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
+}
+
+// Starts nf_gpu in the background with its output going to `log`.
+pid_t spawn(const std::string& args, const std::filesystem::path& log) {
+  const std::string command = "exec " + std::string(NF_GPU_BINARY) + " " + args + " > " + log.string() + " 2>&1";
+  const pid_t pid = fork();
+  if (pid == 0) {
+    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  return pid;
+}
+
+std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// Waits until `log` holds `text` (true) or `seconds` pass (false).
+bool wait_for(const std::filesystem::path& log, const std::string& text, double seconds) {
+  for (int i = 0; i < int(seconds * 20); ++i) {
+    if (slurp(log).find(text) != std::string::npos) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return false;
+}
+
+int wait_exit(pid_t pid) {
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
 }  // namespace
@@ -110,7 +145,7 @@ TEST_CASE("nf_gpu metrics scores strand files and names bad input") {
   CHECK(m["consistency"]["length_mean_cm"].get<double>() == doctest::Approx(1.8));
   for (const auto& score : m["match"]) CHECK(score["fscore"].get<double>() == doctest::Approx(100));
   std::ofstream(dir / "nf_cli_bad.hair") << "HAIR but truncated";
-  const Result bad = run("metrics --pred " + (dir / "nf_cli_bad.hair").string());
+  const Result bad = run("metrics --scale 1 --pred " + (dir / "nf_cli_bad.hair").string());
   CHECK(bad.code == 1);
   CHECK(bad.output.find("nf_cli_bad.hair") != std::string::npos);
   CHECK(run("metrics --pred /nonexistent.hair").code == 2);
@@ -120,7 +155,7 @@ TEST_CASE("nf_gpu metrics scores strand files and names bad input") {
 
 TEST_CASE("nf_gpu metrics compares meshes") {
   const auto dir = std::filesystem::temp_directory_path();
-  nf::io::Mesh quad;
+  nf::geometry::Mesh quad;
   quad.positions = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
   quad.triangles = {0, 1, 2, 0, 2, 3};
   nf::io::write_mesh(dir / "nf_cli_quad.ply", quad);
@@ -134,6 +169,45 @@ TEST_CASE("nf_gpu metrics compares meshes") {
   CHECK(run("metrics --mesh " + (dir / "nf_cli_quad.ply").string()).code == 2);  // --ref missing
   std::filesystem::remove(dir / "nf_cli_quad.ply");
   std::filesystem::remove(dir / "nf_cli_quad_up.obj");
+}
+
+TEST_CASE("nf_gpu metrics never guesses a unit, and takes thresholds with units") {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "nf_cli_units";
+  fs::remove_all(dir);
+  fs::create_directories(dir / "result");
+  // 30 strands 1 cm apart in metres (0.01 units); the prediction is the truth shifted by 5 mm.
+  std::vector<float> truth, shifted;
+  for (int i = 0; i < 30; ++i)
+    for (int p = 0; p < 10; ++p) {
+      truth.insert(truth.end(), {0.01f * float(i), 0.001f * float(p), 0.f});
+      shifted.insert(shifted.end(), {0.01f * float(i), 0.001f * float(p), 0.005f});
+    }
+  nf::io::write_hair(dir / "result" / "pred.hair", nf::io::StrandSet::uniform(30, 10, shifted));
+  nf::io::write_hair(dir / "truth.hair", nf::io::StrandSet::uniform(30, 10, truth));
+  const std::string files = " --pred " + (dir / "result" / "pred.hair").string() + " --gt " + (dir / "truth.hair").string();
+  const Result unknown = run("metrics" + files);
+  CHECK(unknown.code == 2);
+  CHECK(unknown.output.find("--scale") != std::string::npos);  // says what to do
+  // Metres: 5 mm apart is a match at 2 cm, not at 2 mm.
+  const Result cm = run("metrics --json --scale 100" + files);
+  REQUIRE(cm.code == 0);
+  CHECK(nf::json::parse(cm.output)["match"][0]["fscore"].get<double>() == doctest::Approx(100));
+  const Result mm = run("metrics --json --scale 100 --thresholds mm" + files);
+  REQUIRE(mm.code == 0);
+  const nf::json mm_json = nf::json::parse(mm.output);
+  CHECK(mm_json["match"][0]["distance_cm"].get<double>() == doctest::Approx(0.2));
+  CHECK(mm_json["match"][0]["fscore"].get<double>() == doctest::Approx(0));
+  // A scale.json beside the result says the unit; --thresholds takes units per entry.
+  std::ofstream(dir / "result" / "scale.json") << R"({"cm_per_unit": 100})";
+  const Result declared = run("metrics --json --thresholds 6mm:20,1cm:30" + files);
+  REQUIRE(declared.code == 0);
+  const nf::json d = nf::json::parse(declared.output);
+  CHECK(d["cm_per_unit"].get<double>() == 100);
+  CHECK(d["scale_source"].get<std::string>().find("scale.json") != std::string::npos);
+  CHECK(d["match"][0]["fscore"].get<double>() == doctest::Approx(100));
+  CHECK(run("metrics --thresholds 2:20" + files).code == 2);  // no unit
+  fs::remove_all(dir);
 }
 
 TEST_CASE("usage errors exit with 2") {
@@ -164,6 +238,53 @@ TEST_CASE("nf_gpu synth, orient and render chain on a tiny scene; bad views exit
   std::filesystem::remove_all(dir);
 }
 
+TEST_CASE("render and orient never write into the scene nor replace a file nf_gpu did not write") {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "nf_cli_guard";
+  fs::remove_all(dir);
+  const std::string scene = (dir / "scene").string();
+  REQUIRE(run("synth --animal fox --views 2 --res 32 --strands 500 --spp-axis 1 --out " + scene).code == 0);
+  const auto bytes = [](const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  const std::string photo = bytes(dir / "scene" / "images" / "001.png"), mask = bytes(dir / "scene" / "masks" / "001.png");
+  const std::string render = "render --strands " + scene + "/gt/strands.hair --mesh " + scene + "/gt/bald.ply --scene " +
+                             scene + " --views 1 --spp-axis 1 --out ";
+  const std::string orient = "orient --scene " + scene + " --views 1 --out ";
+  fs::create_directory_symlink(dir / "scene" / "masks", dir / "masks_link");
+  for (const std::string& command : {render, orient}) {
+    INFO(command);
+    for (const fs::path& inside : {dir / "scene" / "images", dir / "scene" / "masks", dir / "other" / ".." / "scene" / "masks",
+                                   dir / "masks_link"}) {
+      const Result r = run(command + inside.string());
+      CHECK(r.code == 2);
+      CHECK(r.output.find("inside the scene folder") != std::string::npos);
+    }
+    // A folder of the user's with a file of the name nf_gpu would write: refused, file kept.
+    fs::create_directories(dir / "mine");
+    std::ofstream(dir / "mine" / "001.png") << "my picture";
+    const Result theirs = run(command + (dir / "mine").string());
+    CHECK(theirs.code == 1);
+    CHECK(theirs.output.find("was not written by nf_gpu") != std::string::npos);
+    CHECK(bytes(dir / "mine" / "001.png") == "my picture");
+    fs::remove_all(dir / "mine");
+    // Its own earlier output is replaced; an --out that is a file is bad input.
+    CHECK(run(command + (dir / "out").string()).code == 0);
+    CHECK(run(command + (dir / "out").string()).code == 0);
+    const Result file = run(command + (dir / "scene" / "transforms.json").string());
+    CHECK(file.code != 0);
+    fs::remove_all(dir / "out");
+  }
+  CHECK(bytes(dir / "scene" / "images" / "001.png") == photo);
+  CHECK(bytes(dir / "scene" / "masks" / "001.png") == mask);
+  std::ofstream(dir / "a_file") << "x";
+  const Result file = run(orient + (dir / "a_file").string());
+  CHECK(file.code == 1);
+  CHECK(file.output.find("is an existing file") != std::string::npos);
+  fs::remove_all(dir);
+}
+
 TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cached, with clear refusals") {
   namespace fs = std::filesystem;
   const fs::path root = fs::temp_directory_path() / "nf_cli_reconstruct";
@@ -178,7 +299,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   for (const char* f : {"neus/outer.ply", "neus/model.nfwt", "neus/normalisation.json", "neus/metrics.json",
                         "neus/training.jsonl", "neus/stage.json", "neus/renders/007_rgb.png", "neus/renders/007_depth.exr"})
     CHECK_MESSAGE(fs::exists(work / f), f);
-  const nf::io::Mesh mesh = nf::io::read_mesh(work / "neus" / "outer.ply");
+  const nf::geometry::Mesh mesh = nf::io::read_mesh(work / "neus" / "outer.ply");
   CHECK(mesh.triangle_count() > 100);
   std::ifstream metrics(work / "neus" / "metrics.json");
   const nf::json m = nf::json::parse(metrics);
@@ -194,9 +315,69 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   CHECK(outcome[0]["ran"] == false);  // unchanged: skipped
 
   CHECK(run("reconstruct --scene " + scene.string() + " --out " + (scene / "work").string() + tiny).code == 2);
-  CHECK(run("reconstruct --scene " + scene.string() + " --out " + work.string() + " --set body.steps=3").code == 2);
+  CHECK(run("reconstruct --scene " + scene.string() + " --out " + work.string() + " --set nues.steps=3").code == 2);
   const Result bad = run("reconstruct --scene " + scene.string() + " --out " + work.string() + " --set neus.colour=3");
-  CHECK(bad.code == 1);
-  CHECK(bad.output.find("neus setting 'colour' is unknown") != std::string::npos);
+  CHECK(bad.code == 2);
+  CHECK(bad.output.find("no setting 'colour'") != std::string::npos);
+  CHECK(bad.output.find("colour_weight") != std::string::npos);  // lists the settings
+
+  // A typo fails before any work, and creates nothing.
+  const fs::path fresh = root / "fresh";
+  const Result typo = run("reconstruct --scene " + scene.string() + " --out " + fresh.string() + " --set neus.stpes=3");
+  CHECK(typo.code == 2);
+  CHECK(typo.output.find("did you mean 'steps'") != std::string::npos);
+  CHECK_FALSE(fs::exists(fresh));
+  const Result late = run("reconstruct --scene " + scene.string() + " --out " + fresh.string() + " --set neus.mesh_resolution=2");
+  CHECK(late.code == 2);
+  CHECK_FALSE(fs::exists(fresh));
+  std::ofstream(root / "a_file") << "x";
+  const Result file = run("reconstruct --scene " + scene.string() + " --out " + (root / "a_file").string());
+  CHECK(file.code == 1);
+  CHECK(file.output.find("is an existing file") != std::string::npos);
+  CHECK(file.output.find("internal error") == std::string::npos);
+
+  const Result help = run("reconstruct --help");
+  CHECK(help.code == 0);
+  CHECK(help.output.find("stages, in order: neus") != std::string::npos);
+  const Result stage_help = run("reconstruct --help-stage neus");
+  CHECK(stage_help.code == 0);
+  CHECK(stage_help.output.find("mesh_resolution") != std::string::npos);
+  CHECK(stage_help.output.find("[8, 2048]") != std::string::npos);
+  CHECK(run("reconstruct --help-stage nues").code == 2);
+  fs::remove_all(root);
+}
+
+TEST_CASE("Ctrl-C during training saves a checkpoint, says how to resume and exits with 130") {
+  namespace fs = std::filesystem;
+  const fs::path root = fs::temp_directory_path() / "nf_cli_sigint";
+  fs::remove_all(root);
+  const fs::path scene = root / "scene", work = root / "work", log = root / "log.txt";
+  REQUIRE(run("synth --animal dog --views 6 --res 48 --strands 2000 --spp-axis 1 --out " + scene.string()).code == 0);
+  // Many cheap steps and no periodic checkpoint: only the interrupt can save one.
+  const std::string args = "reconstruct --scene " + scene.string() + " --out " + work.string() +
+                           " --quality draft --set neus.steps=100000 --set neus.rays=64 --set neus.samples_per_ray=8"
+                           " --set neus.fine_samples=4 --set neus.mesh_resolution=32 --set neus.hull_resolution=32"
+                           " --set neus.checkpoint_interval=0";
+  pid_t pid = spawn(args, log);
+  REQUIRE(wait_for(log, "training views", 120));
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  kill(pid, SIGINT);
+  CHECK(wait_exit(pid) == 130);
+  std::string out = slurp(log);
+  INFO(out);
+  CHECK(out.find("neus: stopped at step ") != std::string::npos);
+  CHECK(out.find("checkpoint saved") != std::string::npos);
+  CHECK(out.find("resume with the same command: ") != std::string::npos);
+  CHECK(fs::exists(work / ".resume" / "neus" / "checkpoint.nfwt"));
+  CHECK_FALSE(fs::exists(work / "neus.partial"));
+  CHECK_FALSE(fs::exists(work / "neus"));
+
+  // The same command resumes from the saved step.
+  pid = spawn(args, log);
+  CHECK(wait_for(log, "resuming from", 120));
+  kill(pid, SIGINT);
+  CHECK(wait_exit(pid) == 130);
+  out = slurp(log);
+  CHECK(out.find("at step 0") == std::string::npos);
   fs::remove_all(root);
 }

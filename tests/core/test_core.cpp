@@ -1,4 +1,5 @@
-// engine/core: atomic writes, finite checks, statistics, errors and exit codes.
+// engine/core: atomic writes, finite checks, statistics, errors and exit codes, the output guard,
+// text helpers and the interrupt flag.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -10,7 +11,12 @@
 #include "engine/core/content_hash.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/finite.hpp"
+#include "engine/core/interrupt.hpp"
+#include "engine/core/output_guard.hpp"
 #include "engine/core/stats.hpp"
+#include "engine/core/text.hpp"
+
+#include <csignal>
 
 using namespace nf;
 namespace fs = std::filesystem;
@@ -83,4 +89,57 @@ TEST_CASE("content hashes: equal bytes hash equal, one changed byte changes the 
   CHECK(nf::hash_bytes("").size() == 16);
   CHECK_THROWS_WITH_AS(nf::hash_file(dir / "missing.bin"), doctest::Contains("missing.bin"), nf::InputError);
   fs::remove_all(dir);
+}
+
+TEST_CASE("did you mean: edit distance and the closest known name") {
+  CHECK(edit_distance("steps", "stpes") == 2);
+  CHECK(edit_distance("", "abc") == 3);
+  CHECK(edit_distance("kitten", "sitting") == 3);
+  const std::vector<std::string> keys{"steps", "rays", "samples_per_ray", "mesh_resolution"};
+  CHECK(closest_match("step", keys) == "steps");
+  CHECK(closest_match("mesh_reslution", keys) == "mesh_resolution");
+  CHECK(closest_match("colour", keys).empty());  // nothing close: no suggestion
+  CHECK(did_you_mean("ray", keys) == " (did you mean 'rays'?)");
+  CHECK(join({"a", "b", "c"}) == "a, b, c");
+}
+
+TEST_CASE("the output guard: never inside an input folder, never over a file nf_gpu did not write") {
+  const fs::path root = fs::temp_directory_path() / "nf_test_guard";
+  fs::remove_all(root);
+  fs::create_directories(root / "scene" / "images");
+  std::ofstream(root / "scene" / "images" / "000.png") << "the user's photo";
+  CHECK(path_inside(root / "scene" / "images", root / "scene"));
+  CHECK(path_inside(root / "out" / ".." / "scene" / "x", root / "scene"));  // through ..
+  CHECK_FALSE(path_inside(root / "scene2", root / "scene"));
+  fs::create_directory_symlink(root / "scene" / "images", root / "link");
+  CHECK(path_inside(root / "link", root / "scene"));  // through a symlink
+  CHECK_THROWS_AS(refuse_output_inside(root / "link", root / "scene", "--out", "scene"), UsageError);
+  CHECK_NOTHROW(refuse_output_inside(root / "out", root / "scene", "--out", "scene"));
+
+  // A folder holding a file nf_gpu did not write: that file is never claimed.
+  OutputFolder theirs(root / "scene" / "images");
+  CHECK_THROWS_WITH_AS(theirs.claim("000.png"), doctest::Contains("was not written by nf_gpu"), InputError);
+  CHECK(read(root / "scene" / "images" / "000.png") == "the user's photo");
+
+  OutputFolder out(root / "out");
+  const fs::path file = out.claim("000.png");
+  std::ofstream(file) << "preview";
+  CHECK(OutputFolder(root / "out").claim("000.png") == file);  // ours: a later run may replace it
+  std::ofstream(root / "out" / "notes.txt") << "mine";
+  CHECK_THROWS_AS(OutputFolder(root / "out").claim("notes.txt"), InputError);
+
+  std::ofstream(root / "a_file") << "x";
+  CHECK_THROWS_WITH_AS(OutputFolder(root / "a_file"), doctest::Contains("is an existing file"), InputError);
+  fs::remove_all(root);
+}
+
+TEST_CASE("SIGINT sets the interrupt flag instead of ending the process") {
+  set_interrupted(false);
+  install_interrupt_handler();
+  CHECK_FALSE(interrupted());
+  std::raise(SIGINT);
+  CHECK(interrupted());
+  set_interrupted(false);
+  CHECK(Interrupted("x").code() == ExitCode::Interrupted);
+  CHECK(int(ExitCode::Interrupted) == 130);
 }

@@ -26,20 +26,20 @@ constexpr double kPi = 3.14159265358979323846;
 
 using Grid = test::ScalarGrid;
 
-io::Mesh extract(const Grid& g, float iso = 0.f) { return marching_cubes(g.values.data(), g.dims, g.origin, g.h, iso); }
+geometry::Mesh extract(const Grid& g, float iso = 0.f) { return marching_cubes(g.values.data(), g.dims, g.origin, g.h, iso); }
 
-glm::dvec3 position(const io::Mesh& m, std::uint32_t v) {
+glm::dvec3 position(const geometry::Mesh& m, std::uint32_t v) {
   return {m.positions[3 * std::size_t(v)], m.positions[3 * std::size_t(v) + 1], m.positions[3 * std::size_t(v) + 2]};
 }
-glm::dvec3 normal(const io::Mesh& m, std::uint32_t v) {
+glm::dvec3 normal(const geometry::Mesh& m, std::uint32_t v) {
   return {m.normals[3 * std::size_t(v)], m.normals[3 * std::size_t(v) + 1], m.normals[3 * std::size_t(v) + 2]};
 }
-glm::dvec3 face_cross(const io::Mesh& m, std::size_t t) {  // 2 * area * unit normal
+glm::dvec3 face_cross(const geometry::Mesh& m, std::size_t t) {  // 2 * area * unit normal
   const glm::dvec3 p0 = position(m, m.triangles[3 * t]);
   return glm::cross(position(m, m.triangles[3 * t + 1]) - p0, position(m, m.triangles[3 * t + 2]) - p0);
 }
 
-long long euler_characteristic(const io::Mesh& m) {
+long long euler_characteristic(const geometry::Mesh& m) {
   std::set<std::pair<std::uint32_t, std::uint32_t>> edges;
   for (std::size_t t = 0; t < m.triangle_count(); ++t)
     for (int k = 0; k < 3; ++k) {
@@ -49,13 +49,13 @@ long long euler_characteristic(const io::Mesh& m) {
   return (long long)m.vertex_count() - (long long)edges.size() + (long long)m.triangle_count();
 }
 
-double area(const io::Mesh& m) {
+double area(const geometry::Mesh& m) {
   double a = 0;
   for (std::size_t t = 0; t < m.triangle_count(); ++t) a += 0.5 * glm::length(face_cross(m, t));
   return a;
 }
 
-double signed_volume(const io::Mesh& m) {  // divergence theorem; positive for outward-facing triangles
+double signed_volume(const geometry::Mesh& m) {  // divergence theorem; positive for outward-facing triangles
   double v = 0;
   for (std::size_t t = 0; t < m.triangle_count(); ++t)
     v += glm::dot(position(m, m.triangles[3 * t]),
@@ -171,7 +171,7 @@ TEST_CASE("a sphere: closed manifold of genus 0, accurate area, volume, position
   const int n = 64;
   const float h = 2.f / float(n - 1);
   const Grid g = test::sample_grid({n, n, n}, glm::vec3(-1.f), glm::vec3(h), [&](glm::dvec3 p) { return glm::length(p - c) - r; });
-  io::Mesh m = extract(g);
+  geometry::Mesh m = extract(g);
   REQUIRE(m.triangle_count() > 0);
   CHECK_NOTHROW(m.validate("sphere"));
   CHECK(is_closed_manifold(m));
@@ -206,7 +206,7 @@ TEST_CASE("a sphere: closed manifold of genus 0, accurate area, volume, position
   CHECK(weighted_face_dot / total > 0.999);
 
   // Area-weighted normals of the extracted mesh agree with the analytic ones too.
-  io::Mesh recomputed = m;
+  geometry::Mesh recomputed = m;
   compute_vertex_normals(recomputed);
   double min_recomputed_dot = 1;
   for (std::uint32_t v = 0; v < m.vertex_count(); ++v)
@@ -224,7 +224,7 @@ TEST_CASE("a sphere on an anisotropic grid, and the iso-value shifts the surface
   const double r = 0.6;
   const Grid g = test::sample_grid(dims, glm::vec3(-1.f), h, [&](glm::dvec3 p) { return glm::length(p) - r; });
   for (float iso : {0.f, 0.15f}) {
-    const io::Mesh m = extract(g, iso);
+    const geometry::Mesh m = extract(g, iso);
     CHECK(is_closed_manifold(m));
     CHECK(euler_characteristic(m) == 2);
     const double R = r + iso, volume_error = signed_volume(m) / (4 * kPi * R * R * R / 3) - 1;
@@ -245,7 +245,7 @@ TEST_CASE("a torus has Euler characteristic 0") {
   const double R = 0.6, r = 0.22;
   const int n = 64;
   const Grid g = test::sample_grid({n, n, n}, glm::vec3(-1.f), glm::vec3(2.f / float(n - 1)), [&](glm::dvec3 p) { return test::torus_sdf(p, R, r); });
-  const io::Mesh m = extract(g);
+  const geometry::Mesh m = extract(g);
   CHECK(is_closed_manifold(m));
   CHECK(euler_characteristic(m) == 0);
   const double volume_error = signed_volume(m) / (2 * kPi * kPi * R * r * r) - 1, area_error = area(m) / (4 * kPi * kPi * R * r) - 1;
@@ -262,7 +262,7 @@ TEST_CASE("two disjoint spheres: keep_largest_component keeps the bigger one, wi
   const Grid g = test::sample_grid({n, n, n}, glm::vec3(-1.f), glm::vec3(h), [&](glm::dvec3 p) {
     return std::min(glm::length(p - big) - rb, glm::length(p - small) - rs);
   });
-  io::Mesh m = extract(g);
+  geometry::Mesh m = extract(g);
   CHECK(is_closed_manifold(m));
   CHECK(euler_characteristic(m) == 4);
   // Regions: 1 on the big sphere's vertices, 2 on the small one's.
@@ -303,7 +303,7 @@ TEST_CASE("random noise padded with outside values: always a closed, outward-fac
       if (quantised && iso != 0.f) continue;
       CAPTURE(seed);
       CAPTURE(iso);
-      const io::Mesh m = marching_cubes(values.data(), {n, n, n}, glm::vec3(0.f), glm::vec3(1.f), iso);
+      const geometry::Mesh m = marching_cubes(values.data(), {n, n, n}, glm::vec3(0.f), glm::vec3(1.f), iso);
       CHECK(m.triangle_count() > 1000);
       CHECK(is_closed_manifold(m));
       CHECK(signed_volume(m) > 0);
@@ -335,7 +335,7 @@ TEST_CASE("marching cubes: bad input is rejected, degenerate grids give empty me
 
 TEST_CASE("mesh tools on small meshes") {
   // Two disjoint tetrahedra, the second with more triangles (a split face).
-  io::Mesh m;
+  geometry::Mesh m;
   m.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1,  // tetrahedron A
                  5, 0, 0, 6, 0, 0, 5, 1, 0, 5, 0, 1, 5.25f, 0.25f, 0};  // tetrahedron B, vertex 8 splits a face
   m.triangles = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3,  // outward
@@ -344,13 +344,13 @@ TEST_CASE("mesh tools on small meshes") {
   CHECK(euler_characteristic(m) == 4);
   compute_vertex_normals(m);
   CHECK(glm::dot(normal(m, 0), glm::normalize(glm::dvec3(-1, -1, -1))) == doctest::Approx(1.0));
-  io::Mesh flipped = m;
+  geometry::Mesh flipped = m;
   std::swap(flipped.triangles[0], flipped.triangles[1]);
   CHECK_FALSE(is_closed_manifold(flipped));
-  io::Mesh open = m;
+  geometry::Mesh open = m;
   open.triangles.resize(open.triangles.size() - 3);
   CHECK_FALSE(is_closed_manifold(open));
-  io::Mesh pinched;  // two tetrahedra sharing one vertex: edges fine, vertex not a disk
+  geometry::Mesh pinched;  // two tetrahedra sharing one vertex: edges fine, vertex not a disk
   pinched.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, -1, 0, 0, 0, -1, 0, 0, 0, -1};
   pinched.triangles = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3, 0, 4, 5, 0, 6, 4, 0, 5, 6, 4, 6, 5};
   CHECK_FALSE(is_closed_manifold(pinched));
@@ -367,7 +367,7 @@ TEST_CASE("mesh tools on small meshes") {
   CHECK(m.normals.size() == 15);
   CHECK(is_closed_manifold(m));
 
-  io::Mesh empty;
+  geometry::Mesh empty;
   empty.positions = {1, 2, 3};
   CHECK(keep_largest_component(empty) == 0);
   CHECK(empty.vertex_count() == 0);

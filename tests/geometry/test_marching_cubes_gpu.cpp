@@ -31,21 +31,21 @@ constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
 using Grid = test::ScalarGrid;
 
-io::Mesh cpu_mesh(const Grid& g, float iso = 0.f) { return marching_cubes(g.values.data(), g.dims, g.origin, g.h, iso); }
+geometry::Mesh cpu_mesh(const Grid& g, float iso = 0.f) { return marching_cubes(g.values.data(), g.dims, g.origin, g.h, iso); }
 
-io::Mesh gpu_mesh(const Grid& g, float iso = 0.f, const MarchingCubesGpuOptions& options = {}) {
+geometry::Mesh gpu_mesh(const Grid& g, float iso = 0.f, const MarchingCubesGpuOptions& options = {}) {
   return marching_cubes_gpu(test::context(), g.values, g.dims, g.origin, g.h, iso, options);
 }
 
-glm::vec3 position(const io::Mesh& m, std::size_t v) {
+glm::vec3 position(const geometry::Mesh& m, std::size_t v) {
   return {m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]};
 }
-glm::vec3 normal(const io::Mesh& m, std::size_t v) { return {m.normals[3 * v], m.normals[3 * v + 1], m.normals[3 * v + 2]}; }
+glm::vec3 normal(const geometry::Mesh& m, std::size_t v) { return {m.normals[3 * v], m.normals[3 * v + 1], m.normals[3 * v + 2]}; }
 
 // Pairs every GPU vertex with a distinct CPU vertex whose position is within `tol` per coordinate,
 // preferring the nearest and, among equal positions (several edges may put their vertex on one grid
 // point), the most similar normal. kNone where there is none.
-std::vector<std::uint32_t> match_vertices(const io::Mesh& got, const io::Mesh& cpu, double tol) {
+std::vector<std::uint32_t> match_vertices(const geometry::Mesh& got, const geometry::Mesh& cpu, double tol) {
   const double cell = 2 * tol;  // a match lies in one of the 27 cells around
   auto key = [&](glm::vec3 p) {
     return std::array<long long, 3>{(long long)std::floor(double(p.x) / cell), (long long)std::floor(double(p.y) / cell),
@@ -80,7 +80,7 @@ std::vector<std::uint32_t> match_vertices(const io::Mesh& got, const io::Mesh& c
 
 // Each triangle as its three corner positions (taken from the CPU mesh, through `through` for the
 // GPU mesh), rotated to the smallest of its three rotations so the winding is kept; sorted.
-std::vector<std::array<float, 9>> triangle_set(const io::Mesh& m, const io::Mesh& cpu, const std::vector<std::uint32_t>* through) {
+std::vector<std::array<float, 9>> triangle_set(const geometry::Mesh& m, const geometry::Mesh& cpu, const std::vector<std::uint32_t>* through) {
   std::vector<std::array<float, 9>> out;
   out.reserve(m.triangle_count());
   for (std::size_t t = 0; t < m.triangle_count(); ++t) {
@@ -106,7 +106,7 @@ std::vector<std::array<float, 9>> triangle_set(const io::Mesh& m, const io::Mesh
 // The GPU mesh equals the CPU one up to order: counts, every vertex within 1e-5 of the grid's
 // coordinate scale, normals (all but `loose_normals` of them with dot > 0.9999), and the triangles
 // as oriented position triples.
-void check_same_mesh(const io::Mesh& got, const io::Mesh& cpu, const Grid& g, double loose_normals = 0.0) {
+void check_same_mesh(const geometry::Mesh& got, const geometry::Mesh& cpu, const Grid& g, double loose_normals = 0.0) {
   REQUIRE(got.vertex_count() == cpu.vertex_count());
   REQUIRE(got.triangle_count() == cpu.triangle_count());
   REQUIRE(got.normals.size() == got.positions.size());
@@ -157,7 +157,7 @@ TEST_CASE("gpu marching cubes: a sphere on an anisotropic grid gives the CPU mes
   const Grid g = sphere_grid({41, 53, 37}, glm::vec3(0.05f, 0.038f, 0.055f), glm::dvec3(0.031, -0.017, 0.009), 0.7);
   for (float iso : {0.f, 0.15f, -0.2f}) {
     CAPTURE(iso);
-    const io::Mesh cpu = cpu_mesh(g, iso), got = gpu_mesh(g, iso);
+    const geometry::Mesh cpu = cpu_mesh(g, iso), got = gpu_mesh(g, iso);
     REQUIRE(cpu.triangle_count() > 1000);
     check_same_mesh(got, cpu, g);
     CHECK(is_closed_manifold(got));
@@ -169,7 +169,7 @@ TEST_CASE("gpu marching cubes: a torus gives the CPU mesh, closed") {
   const double R = 0.6, r = 0.22;
   const int n = 56;
   const Grid g = test::sample_grid({n, n, n}, glm::vec3(-1.f), glm::vec3(2.f / float(n - 1)), [&](glm::dvec3 p) { return test::torus_sdf(p, R, r); });
-  const io::Mesh cpu = cpu_mesh(g), got = gpu_mesh(g);
+  const geometry::Mesh cpu = cpu_mesh(g), got = gpu_mesh(g);
   REQUIRE(cpu.triangle_count() > 1000);
   check_same_mesh(got, cpu, g);
   CHECK(is_closed_manifold(got));
@@ -181,14 +181,14 @@ TEST_CASE("gpu marching cubes: random noise, open at the border and padded") {
     const Grid open = noise_grid({19, 23, 17}, seed, false, false);
     for (float iso : {0.f, 0.3f, -0.5f}) {
       CAPTURE(iso);
-      const io::Mesh cpu = cpu_mesh(open, iso), got = gpu_mesh(open, iso);
+      const geometry::Mesh cpu = cpu_mesh(open, iso), got = gpu_mesh(open, iso);
       REQUIRE(cpu.triangle_count() > 1000);
       // A generic field's interpolated gradient can nearly cancel; float (GPU) and double (CPU)
       // then disagree on its direction. Rare: at most one vertex in a thousand.
       check_same_mesh(got, cpu, open, 1e-3);
     }
     const Grid padded = noise_grid({24, 21, 22}, seed, true, false);
-    const io::Mesh cpu = cpu_mesh(padded), got = gpu_mesh(padded);
+    const geometry::Mesh cpu = cpu_mesh(padded), got = gpu_mesh(padded);
     check_same_mesh(got, cpu, padded, 1e-3);
     CHECK(is_closed_manifold(got));
   }
@@ -199,7 +199,7 @@ TEST_CASE("gpu marching cubes: samples exactly on the iso-value count as outside
   for (unsigned seed = 4; seed <= 6; ++seed) {
     CAPTURE(seed);
     const Grid q = noise_grid({15, 13, 17}, seed, seed == 6, true);
-    const io::Mesh cpu = cpu_mesh(q), got = gpu_mesh(q);
+    const geometry::Mesh cpu = cpu_mesh(q), got = gpu_mesh(q);
     REQUIRE(cpu.triangle_count() > 100);
     check_same_mesh(got, cpu, q);
     if (seed == 6) CHECK(is_closed_manifold(got));
@@ -214,7 +214,7 @@ TEST_CASE("gpu marching cubes: samples exactly on the iso-value count as outside
   // One inside sample in a 3^3 grid: an octahedron.
   std::vector<float> v(27, 1.f);
   v[13] = -1.f;
-  const io::Mesh octahedron = marching_cubes_gpu(test::context(), v, {3, 3, 3}, glm::vec3(0.f), glm::vec3(1.f));
+  const geometry::Mesh octahedron = marching_cubes_gpu(test::context(), v, {3, 3, 3}, glm::vec3(0.f), glm::vec3(1.f));
   CHECK(octahedron.vertex_count() == 6);
   CHECK(octahedron.triangle_count() == 8);
   CHECK(is_closed_manifold(octahedron));
@@ -222,7 +222,7 @@ TEST_CASE("gpu marching cubes: samples exactly on the iso-value count as outside
 
 TEST_CASE("gpu marching cubes: slabs smaller than the grid, values at an unaligned offset") {
   const Grid g = sphere_grid({33, 29, 41}, glm::vec3(0.05f), glm::dvec3(0.02, -0.03, 0.01), 0.62);
-  const io::Mesh cpu = cpu_mesh(g);
+  const geometry::Mesh cpu = cpu_mesh(g);
   REQUIRE(cpu.triangle_count() > 1000);
   auto& ctx = test::context();
   const std::uint64_t count = g.values.size();
@@ -235,7 +235,7 @@ TEST_CASE("gpu marching cubes: slabs smaller than the grid, values at an unalign
     MarchingCubesGpuOptions options;
     options.max_binding_bytes = budget;
     check_same_mesh(gpu_mesh(g, 0.f, options), cpu, g);
-    const io::Mesh offset = marching_cubes_gpu(ctx, shifted.range(3, count), g.dims, g.origin, g.h, 0.f, options);
+    const geometry::Mesh offset = marching_cubes_gpu(ctx, shifted.range(3, count), g.dims, g.origin, g.h, 0.f, options);
     check_same_mesh(offset, cpu, g);
     CHECK(is_closed_manifold(offset));
   }
@@ -258,13 +258,13 @@ TEST_CASE("gpu marching cubes: empty and thin grids give empty meshes") {
   // No crossing at all: every sample outside, or every sample inside.
   for (float fill : {1.f, -1.f}) {
     const std::vector<float> flat(7 * 6 * 5, fill);
-    const io::Mesh m = marching_cubes_gpu(ctx, flat, {7, 6, 5}, glm::vec3(0.f), glm::vec3(1.f));
+    const geometry::Mesh m = marching_cubes_gpu(ctx, flat, {7, 6, 5}, glm::vec3(0.f), glm::vec3(1.f));
     CHECK(m.vertex_count() == 0);
     CHECK(m.triangle_count() == 0);
   }
   // Two layers thick: the thinnest grid with cells.
   const Grid slab = noise_grid({9, 7, 2}, 8, false, false);
-  const io::Mesh cpu = cpu_mesh(slab);
+  const geometry::Mesh cpu = cpu_mesh(slab);
   REQUIRE(cpu.triangle_count() > 0);
   check_same_mesh(gpu_mesh(slab), cpu, slab, 1e-3);
 }

@@ -1,4 +1,5 @@
-// Images: PNG (8 and 16 bit) and JPEG through stb, OpenEXR through OpenEXR; masks from alpha.
+// Images: PNG (8 and 16 bit) and JPEG through stb, OpenEXR through OpenEXR; masks from alpha; sizes
+// from headers and truncated files found without decoding.
 #include <doctest/doctest.h>
 
 #include <stb/stb_image_write.h>
@@ -76,4 +77,45 @@ TEST_CASE("broken images are refused with the file named") {
   CHECK_THROWS_WITH_AS(read_image(fs::temp_directory_path() / "nf_no_such.png"), doctest::Contains("cannot open"), InputError);
   fs::remove(path);
   fs::remove(fs::temp_directory_path() / "nf_test_broken.exr");
+}
+
+TEST_CASE("image_size reads PNG and JPEG headers; require_complete_image finds files cut short") {
+  const fs::path png = fs::temp_directory_path() / "nf_test_size.png", jpg = fs::temp_directory_path() / "nf_test_size.jpg";
+  std::vector<unsigned char> rgb(40 * 30 * 3);
+  for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] = static_cast<unsigned char>(i * 7);
+  REQUIRE(stbi_write_png(png.c_str(), 40, 30, 3, rgb.data(), 40 * 3));
+  REQUIRE(stbi_write_jpg(jpg.c_str(), 40, 30, 3, rgb.data(), 90));
+  const auto slurp = [](const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  const auto spit = [](const fs::path& p, const std::string& bytes) { std::ofstream(p, std::ios::binary) << bytes; };
+  const std::string png_bytes = slurp(png), jpg_bytes = slurp(jpg);
+  for (const fs::path& p : {png, jpg}) {
+    CAPTURE(p);
+    CHECK(image_size(p) == std::pair<std::uint32_t, std::uint32_t>{40, 30});
+    CHECK_NOTHROW(require_complete_image(p));
+  }
+  // Data after a complete image (phones append a video to a JPEG; tools append to PNGs) is accepted.
+  spit(jpg, jpg_bytes + std::string("\0\0\0\x18" "ftypmp42") + std::string(3000, 'v'));
+  CHECK_NOTHROW(require_complete_image(jpg));
+  spit(png, png_bytes + "trailing");
+  CHECK_NOTHROW(require_complete_image(png));
+  // Cut short: the header still gives the size, the check says "truncated" and names the file.
+  spit(png, png_bytes.substr(0, png_bytes.size() - 30));
+  CHECK(image_size(png).first == 40);
+  CHECK_THROWS_WITH_AS(require_complete_image(png), doctest::Contains("nf_test_size.png: truncated PNG"), InputError);
+  spit(jpg, jpg_bytes.substr(0, jpg_bytes.size() - 30));
+  CHECK(image_size(jpg).second == 30);
+  CHECK_THROWS_WITH_AS(require_complete_image(jpg), doctest::Contains("nf_test_size.jpg: truncated JPEG"), InputError);
+  // Cut inside the header, or not an image at all.
+  spit(png, png_bytes.substr(0, 20));
+  CHECK_THROWS_WITH_AS(image_size(png), doctest::Contains("nf_test_size.png: truncated or corrupt PNG header"), InputError);
+  spit(jpg, jpg_bytes.substr(0, 10));
+  CHECK_THROWS_WITH_AS(image_size(jpg), doctest::Contains("truncated or corrupt JPEG header"), InputError);
+  spit(png, "GIF89a and more");
+  CHECK_THROWS_WITH_AS(image_size(png), doctest::Contains("not a PNG or JPEG"), InputError);
+  CHECK_THROWS_WITH_AS(require_complete_image(png), doctest::Contains("not a PNG or JPEG"), InputError);
+  fs::remove(png);
+  fs::remove(jpg);
 }

@@ -1,6 +1,7 @@
 // Camera formats: transforms.json round-trips; NeuS, Artemis and COLMAP fixtures written from the
 // same cameras agree with it to 1e-5 (intrinsics, poses and projected points); distortion and bad
-// input are refused with the file and field named.
+// input are refused with the file and field named (a JSON type error by its path, not the JSON
+// library's text); a truncated image is found by the file check that runs before any stage.
 #include <doctest/doctest.h>
 
 #include <zip.h>
@@ -11,7 +12,9 @@
 #include <fstream>
 
 #include "engine/core/error.hpp"
+#include "engine/io/image.hpp"
 #include "engine/io/scene.hpp"
+#include "tests/support/files.hpp"
 #include "tests/support/scene_fixtures.hpp"
 
 using namespace nf;
@@ -21,6 +24,12 @@ namespace fs = std::filesystem;
 namespace {
 
 const std::uint32_t kW = 320, kH = 240;
+
+// A complete black PNG: image sizes are read by stb, which wants a whole header (and the file check
+// wants a whole file).
+void write_png_file(const fs::path& path, std::uint32_t w, std::uint32_t h) {
+  write_png(path, Image{w, h, 1, std::vector<float>(std::size_t(w) * h, 0.f)});
+}
 
 // Eight cameras on a ring, 3 units away, looking at the origin (OpenGL axes).
 std::vector<Camera> ring() {
@@ -91,8 +100,8 @@ TEST_CASE("NeuS, Artemis and COLMAP fixtures agree with the cameras they were wr
     for (std::size_t i = 0; i < cams.size(); ++i) {
       char name[32];
       std::snprintf(name, sizeof name, "%03u.png", unsigned(i));
-      test::write_png_header(root / "image" / name, kW, kH);
-      test::write_png_header(root / "mask" / name, kW, kH);
+      write_png_file(root / "image" / name, kW, kH);
+      write_png_file(root / "mask" / name, kW, kH);
     }
     check_same(read_scene(root), cams);
   }
@@ -102,7 +111,7 @@ TEST_CASE("NeuS, Artemis and COLMAP fixtures agree with the cameras they were wr
     test::write_artemis_cameras(root, cams);
     for (std::size_t i = 0; i < cams.size(); ++i) {
       test::write_jpeg_header(root / (test::artemis_name(i) + ".jpg"), kW, kH);
-      test::write_png_header(root / (test::artemis_name(i) + "_alpha.png"), kW, kH);
+      write_png_file(root / (test::artemis_name(i) + "_alpha.png"), kW, kH);
     }
     const Scene s = read_scene(root);
     check_same(s, cams);
@@ -149,19 +158,78 @@ TEST_CASE("scene files: missing images, wrong sizes and masks that do not match 
   s.cameras.resize(2);
   for (auto& c : s.cameras) {
     c.image = dir / "images" / (c.name + ".png"), c.mask = dir / "masks" / (c.name + ".png");
-    test::write_png_header(c.image, kW, kH);
-    test::write_png_header(c.mask, kW, kH);
+    write_png_file(c.image, kW, kH);
+    write_png_file(c.mask, kW, kH);
   }
   CHECK_NOTHROW(s.check_files("scene"));
-  test::write_png_header(s.cameras[1].mask, kW, kH + 1);
+  write_png_file(s.cameras[1].mask, kW, kH + 1);
   CHECK_THROWS_WITH_AS(s.check_files("scene"), doctest::Contains("camera 'cam1': mask"), InputError);
   CHECK_THROWS_WITH_AS(s.check_files("scene"), doctest::Contains("is 320x241 but the camera is 320x240"), InputError);
-  test::write_png_header(s.cameras[1].mask, kW, kH);
-  test::write_png_header(s.cameras[0].image, kW / 2, kH);
+  write_png_file(s.cameras[1].mask, kW, kH);
+  write_png_file(s.cameras[0].image, kW / 2, kH);
   CHECK_THROWS_WITH_AS(s.check_files("scene"), doctest::Contains("camera 'cam0': image"), InputError);
   fs::remove(s.cameras[0].image);
   CHECK_THROWS_WITH_AS(s.check_files("scene"), doctest::Contains("does not exist"), InputError);
   std::ofstream(s.cameras[0].image) << "not a png";
   CHECK_THROWS_AS(s.check_files("scene"), InputError);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("transforms.json: a value of the wrong type is named by its path, not by the JSON library") {
+  const fs::path dir = fs::temp_directory_path() / "nf_scene_types";
+  fs::create_directories(dir);
+  const fs::path file = dir / "transforms.json";
+  const auto message = [&](const std::string& text) {
+    std::ofstream(file) << text;
+    try {
+      (void)read_scene(dir);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string good = R"("file_path": "a.png", "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]])";
+  const std::string bad = R"("file_path": "b.png", "transform_matrix": [[1,0,0,0],[0,1,"a",0],[0,0,1,0],[0,0,0,1]])";
+  std::string m = message(R"({"fl_x": 300, "w": 64, "h": 48, "frames": [{)" + good + "}, {" + good + "}, {" + good +
+                          "}, {" + bad + "}]}");
+  CHECK(m.find(file.string() + ": frames[3].transform_matrix[1][2]: expected a number, got \"a\"") != std::string::npos);
+  CHECK(m.find("json.exception") == std::string::npos);
+  m = message(R"({"fl_x": 300, "w": "64", "h": 48, "frames": [{)" + good + "}]}");
+  CHECK(m.find("w: expected a number, got \"64\"") != std::string::npos);
+  m = message(R"({"fl_x": 300, "w": 64, "h": 48, "frames": [{"file_path": 7, "transform_matrix": []}]})");
+  CHECK(m.find("frames[0].transform_matrix: expected 3 or 4 rows") != std::string::npos);
+  m = message(R"({"fl_x": 300, "w": 64, "h": 48, "frames": [{"file_path": 7, "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0]]}]})");
+  CHECK(m.find("frames[0].file_path: expected a string, got 7") != std::string::npos);
+  m = message(R"({"fl_x": 300, "w": 64.5, "h": 48, "frames": [{)" + good + "}]}");
+  CHECK(m.find("w: expected a whole number of pixels, got 64.5") != std::string::npos);
+  m = message(R"({"frames": [1, 2)");
+  CHECK(m.find("not valid JSON (line 1") != std::string::npos);
+  CHECK(m.find("json.exception") == std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("a truncated image is found by the file check, before any stage runs, naming the file") {
+  const fs::path dir = fs::temp_directory_path() / "nf_scene_truncated";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  Scene s;
+  s.root = dir;
+  s.cameras = ring();
+  s.cameras.resize(2);
+  for (auto& c : s.cameras) {
+    c.image = dir / (c.name + ".png");
+    write_png_file(c.image, kW, kH);
+  }
+  CHECK_NOTHROW(s.check_files("scene"));
+  // The header is whole, so the size still reads; the data and the IEND chunk are gone.
+  const std::string bytes = test::slurp(s.cameras[1].image);
+  test::spit(s.cameras[1].image, bytes.substr(0, bytes.size() - 20));
+  CHECK_THROWS_WITH_AS(s.check_files("scene"), doctest::Contains("camera 'cam1': image"), InputError);
+  CHECK_THROWS_WITH_AS(s.check_files("scene"), doctest::Contains((s.cameras[1].image.string() + ": truncated PNG").c_str()),
+                       InputError);
+  // Cut inside the header (after the width and height, before the bit depth): nothing is read.
+  test::spit(s.cameras[1].image, bytes.substr(0, 24));
+  CHECK_THROWS_WITH_AS(s.check_files("scene"),
+                       doctest::Contains((s.cameras[1].image.string() + ": truncated or corrupt PNG header").c_str()), InputError);
   fs::remove_all(dir);
 }

@@ -11,8 +11,8 @@ using namespace nf::metrics;
 namespace {
 
 // A UV sphere of radius r.
-io::Mesh sphere(float r, int rings = 48, int segments = 96) {
-  io::Mesh m;
+geometry::Mesh sphere(float r, int rings = 48, int segments = 96) {
+  geometry::Mesh m;
   for (int i = 0; i <= rings; ++i)
     for (int j = 0; j <= segments; ++j) {
       const double th = 3.14159265358979 * i / rings, ph = 2 * 3.14159265358979 * j / segments;
@@ -30,7 +30,7 @@ io::Mesh sphere(float r, int rings = 48, int segments = 96) {
 }  // namespace
 
 TEST_CASE("a mesh against itself: zero chamfer, perfect normals, F-score 100") {
-  const io::Mesh s = sphere(1.f);
+  const geometry::Mesh s = sphere(1.f);
   const auto m = surface_metrics(s, s, 1.0, 1.0, 20000, 3);
   CHECK(m.chamfer_mean_mm == doctest::Approx(0).epsilon(1e-9));
   CHECK(m.normal_consistency == doctest::Approx(1.0));
@@ -50,7 +50,7 @@ TEST_CASE("concentric spheres 1 cm apart are 10 mm apart, in both directions") {
 TEST_CASE("strand tips on the outer surface are close to it; tips short of it are not") {
   // Radial strands from a 10 cm sphere, 1 cm long, against an outer sphere of 11 cm.
   std::vector<float> on, short_of;
-  const io::Mesh body = sphere(10.f, 24, 48);
+  const geometry::Mesh body = sphere(10.f, 24, 48);
   for (std::uint64_t v = 0; v < body.vertex_count(); ++v) {
     const float* p = &body.positions[3 * v];
     for (int k = 0; k < 5; ++k) {

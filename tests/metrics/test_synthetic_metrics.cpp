@@ -21,7 +21,7 @@ namespace {
 constexpr double kCmPerUnit = 100.0;  // synthetic scenes are in metres
 
 struct Animal {
-  io::Mesh body;
+  geometry::Mesh body;
   knowledge::Knowledge knowledge;
   synth::Fur fur;
 };

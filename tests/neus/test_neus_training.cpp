@@ -107,7 +107,7 @@ io::Scene write_capsule_scene(const fs::path& dir, const Capsule& cap, int views
   return io::read_scene(dir / "transforms.json");
 }
 
-io::Mesh capsule_mesh(const Capsule& cap) {
+geometry::Mesh capsule_mesh(const Capsule& cap) {
   const int n = 96;
   const glm::dvec3 lo = cap.offset + cap.scale * (glm::min(cap.a, cap.b) - cap.r - 0.05);
   const glm::dvec3 hi = cap.offset + cap.scale * (glm::max(cap.a, cap.b) + cap.r + 0.05);
@@ -119,7 +119,7 @@ io::Mesh capsule_mesh(const Capsule& cap) {
       for (int i = 0; i < dims.x; ++i)
         v[(std::size_t(k) * dims.y + j) * dims.x + i] = float(cap.sdf(lo + glm::dvec3(i, j, k) * voxel) / cap.scale);
   // Positions relative to lo, then moved, keep float precision far from the origin.
-  io::Mesh m = geometry::marching_cubes(v.data(), dims, glm::vec3(0.f), glm::vec3(float(voxel)), 0.f);
+  geometry::Mesh m = geometry::marching_cubes(v.data(), dims, glm::vec3(0.f), glm::vec3(float(voxel)), 0.f);
   for (std::size_t i = 0; i < m.positions.size(); ++i) m.positions[i] = float(double(m.positions[i]) + lo[i % 3]);
   return m;
 }
@@ -128,7 +128,7 @@ struct Outcome {
   double chamfer_pct = 0, initial_chamfer_pct = 0, hull_chamfer_pct = 0, first_loss = 0, last_loss = 0, psnr = 0;
 };
 
-double chamfer_pct(const io::Mesh& mesh, const Capsule& cap) {
+double chamfer_pct(const geometry::Mesh& mesh, const Capsule& cap) {
   const double cm_per_unit = 1.0 / cap.scale;  // any unit: the check is relative to the size
   const metrics::SurfaceMetrics m = metrics::surface_metrics(mesh, capsule_mesh(cap), cm_per_unit, 5.0, 20000, 1);
   const double diagonal_mm = glm::length(cap.b - cap.a + 2.0 * cap.r) * 10.0;
@@ -166,7 +166,7 @@ Outcome train_and_measure(const neus::NeusTrainingData& data, const Capsule& cap
     CHECK(std::isfinite(r.loss));
     return true;
   });
-  const io::Mesh mesh = neus::extract_surface(trainer.field(), data.norm, data.hull, 96);
+  const geometry::Mesh mesh = neus::extract_surface(trainer.field(), data.norm, data.hull, 96);
   REQUIRE(mesh.triangle_count() > 0);
   out.chamfer_pct = chamfer_pct(mesh, cap);
   MESSAGE("chamfer (% of the diagonal): initial ", out.initial_chamfer_pct, ", visual hull ", out.hull_chamfer_pct,

@@ -270,7 +270,7 @@ TEST_CASE("visual hull of a synthetic animal contains its fur envelope and skips
   o.body_voxel = 0.008f;
   synth::synthesize_scene(dir, o);
   const io::Scene scene = io::read_scene(dir);
-  const io::Mesh outer = io::read_mesh(dir / "gt" / "outer.ply");
+  const geometry::Mesh outer = io::read_mesh(dir / "gt" / "outer.ply");
   REQUIRE(outer.vertex_count() > 100);
 
   const auto t0 = std::chrono::steady_clock::now();

@@ -83,7 +83,7 @@ TEST_CASE("previews: one PNG per view at the camera's size, strands in their reg
   CHECK(std::ifstream(out / "notes.txt").good());  // nothing else in the folder is touched
 
   // The regions the strands take: those of the body vertices nearest to their roots.
-  const io::Mesh mesh = io::read_mesh(t.mesh());
+  const geometry::Mesh mesh = io::read_mesh(t.mesh());
   const io::StrandSet strands = io::read_strands(t.strands());
   const geometry::PointIndex index(mesh.positions);
   std::set<std::int32_t> present;

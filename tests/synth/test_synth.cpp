@@ -59,7 +59,7 @@ double fraction_in_masks(const io::Scene& scene, const std::vector<glm::vec3>& p
 TEST_CASE("fur grows as the knowledge says: lengths per region, nothing on bald regions, outside the skin") {
   const auto p = body::animal_proportions("fox");
   const body::BodyModel model = body::build_quadruped(p, {p.torso_length / 70});
-  const io::Mesh skin = body::pose_body(model, {});
+  const geometry::Mesh skin = body::pose_body(model, {});
   const knowledge::Knowledge know = knowledge::preset("fox");
   synth::GrowOptions o;
   o.strand_count = 20000, o.points_per_strand = 32, o.seed = 3, o.animal = "fox", o.torso_length = p.torso_length;
@@ -125,7 +125,7 @@ TEST_CASE("the renderer's coverage matches analytic areas") {
     for (int y = 0; y < n; ++y)
       for (int x = 0; x < n; ++x)
         field[(std::size_t(z) * n + y) * n + x] = glm::length(glm::vec3(x, y, z) * voxel - 0.35f) - 0.25f;
-  io::Mesh sphere = geometry::marching_cubes(field.data(), glm::ivec3(n), glm::vec3(0), glm::vec3(voxel), 0.0f);
+  geometry::Mesh sphere = geometry::marching_cubes(field.data(), glm::ivec3(n), glm::vec3(0), glm::vec3(voxel), 0.0f);
   for (std::size_t i = 0; i < sphere.positions.size(); ++i) sphere.positions[i] -= 0.35f;
   geometry::compute_vertex_normals(sphere);
   synth::RenderOptions options;
@@ -144,7 +144,7 @@ TEST_CASE("the renderer's coverage matches analytic areas") {
   const io::StrandSet strand = io::StrandSet::uniform(1, 100, xyz);
   synth::StrandLook look;
   look.radius = 0.004f;  // 1.6 px wide
-  const synth::StrandRenderer renderer(io::Mesh{}, {}, strand, look, options);
+  const synth::StrandRenderer renderer(geometry::Mesh{}, {}, strand, look, options);
   const synth::Rendered r = renderer.render(cam);
   double covered = 0;
   for (float c : r.coverage.pixels) covered += c;
@@ -184,10 +184,10 @@ TEST_CASE("a written synthetic scene: files, ground truth, and roots inside the 
     const io::StrandSet strands = io::read_hair(out / "gt" / "strands.hair");
     CHECK(strands.strand_count() == 50000);
     CHECK(strands.points_in(0) == 100);
-    const io::Mesh bald = io::read_mesh(out / "gt" / "bald.ply");
+    const geometry::Mesh bald = io::read_mesh(out / "gt" / "bald.ply");
     CHECK(bald.regions.size() == bald.vertex_count());
     CHECK(io::read_mesh(out / "gt" / "body.glb").vertex_count() == bald.vertex_count());
-    const io::Mesh outer = io::read_mesh(out / "gt" / "outer.ply");
+    const geometry::Mesh outer = io::read_mesh(out / "gt" / "outer.ply");
     CHECK(geometry::is_closed_manifold(outer));
     const knowledge::Knowledge k = knowledge::read_knowledge(out / "gt" / "knowledge.json");
     const glm::vec3 left(info["eye_centres"]["left"][0], info["eye_centres"]["left"][1], info["eye_centres"]["left"][2]);

@@ -2,7 +2,7 @@
 // FMA (the default of GCC on targets that have it, e.g. arm64) would change the last bits.
 #pragma GCC optimize("fp-contract=off")
 
-#include "engine/splat/body_depth.hpp"
+#include "engine/geometry/mesh_depth.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -14,14 +14,14 @@
 #include "engine/gpu/kernel.hpp"
 #include "engine/gpu/scan.hpp"
 
-namespace nf::splat {
+namespace nf::geometry {
 namespace {
 
 struct VertexPush {
   float rows[12];
   std::uint32_t vertices;
 };
-// Mirrors the push block of shaders/include/nf_body_depth.glsl.
+// Mirrors the push block of shaders/include/nf_mesh_depth.glsl.
 struct DepthPush {
   float fx, fy, inv_fx, inv_fy, cx, cy, near, margin;
   std::uint32_t width, height, tile, triangles, stride;
@@ -32,7 +32,7 @@ constexpr std::uint32_t kInfBits = 0x7f800000u;  // +inf: above every positive f
 
 std::uint64_t tiles_along(std::uint32_t pixels, std::uint32_t tile) { return (pixels + tile - 1) / tile; }
 
-void check_tile(const BodyDepthOptions& options) {
+void check_tile(const MeshDepthOptions& options) {
   if (options.tile < 1 || options.tile > 256)
     throw InputError("body depth: tile is " + std::to_string(options.tile) + "; it must lie in [1, 256]");
 }
@@ -67,7 +67,7 @@ DepthPush depth_push(const DepthCamera& cam, std::uint32_t tile) {
   return p;
 }
 
-// The conservative pixel box of the part of the triangle at depth >= near (body_depth_setup.comp).
+// The conservative pixel box of the part of the triangle at depth >= near (mesh_depth_setup.comp).
 Box setup_box(const DepthPush& pc, const V3 v[3]) {
   float umin = 1e30f, umax = -1e30f, vmin = 1e30f, vmax = -1e30f;
   int n = 0;
@@ -105,7 +105,7 @@ V3 cross(const V3& a, const V3& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 
-// nf_body_depth_box of shaders/include/nf_body_depth.glsl.
+// nf_mesh_depth_box of shaders/include/nf_mesh_depth.glsl.
 void raster_ref(const DepthPush& pc, const V3 v[3], const Box& box, float* depth) {
   const V3 &a = v[0], &b = v[1], &c = v[2];
   const V3 k0 = cross(a, b), k1 = cross(b, c), k2 = cross(c, a);
@@ -168,9 +168,9 @@ void validate(const DepthCamera& camera) {
                          "] is not finite");
 }
 
-void body_depth(gpu::Stream& stream, const DepthCamera& camera, gpu::BufferRange positions,
+void mesh_depth(gpu::Stream& stream, const DepthCamera& camera, gpu::BufferRange positions,
                 std::uint64_t vertex_count, gpu::BufferRange triangles, std::uint64_t triangle_count,
-                gpu::BufferRange depth, const BodyDepthOptions& options) {
+                gpu::BufferRange depth, const MeshDepthOptions& options) {
   validate(camera);
   check_tile(options);
   gpu::Context& context = stream.context();
@@ -190,9 +190,9 @@ void body_depth(gpu::Stream& stream, const DepthCamera& camera, gpu::BufferRange
   stream.fill(depth_map, kInfBits);
   if (triangle_count == 0 || vertex_count == 0) return;
 
-  const gpu::Kernel& vertices_kernel = context.kernel("splat/body_depth_vertices", {{0, kWorkgroup}});
-  const gpu::Kernel& setup_kernel = context.kernel("splat/body_depth_setup", {{0, kWorkgroup}});
-  const gpu::Kernel& raster_kernel = context.kernel("splat/body_depth_raster", {{0, kWorkgroup}});
+  const gpu::Kernel& vertices_kernel = context.kernel("geometry/mesh_depth_vertices", {{0, kWorkgroup}});
+  const gpu::Kernel& setup_kernel = context.kernel("geometry/mesh_depth_setup", {{0, kWorkgroup}});
+  const gpu::Kernel& raster_kernel = context.kernel("geometry/mesh_depth_raster", {{0, kWorkgroup}});
 
   const gpu::BufferRange cam = stream.scratch(vertex_count * 12, "body depth: camera-space vertices");
   VertexPush vp{};
@@ -225,8 +225,8 @@ void body_depth(gpu::Stream& stream, const DepthCamera& camera, gpu::BufferRange
   }
 }
 
-std::vector<float> body_depth(gpu::Context& context, const DepthCamera& camera, std::span<const float> positions,
-                              std::span<const std::uint32_t> triangles, const BodyDepthOptions& options) {
+std::vector<float> mesh_depth(gpu::Context& context, const DepthCamera& camera, std::span<const float> positions,
+                              std::span<const std::uint32_t> triangles, const MeshDepthOptions& options) {
   validate(camera);
   check_tile(options);
   check_mesh(positions, triangles);
@@ -235,18 +235,18 @@ std::vector<float> body_depth(gpu::Context& context, const DepthCamera& camera, 
   gpu::Buffer<float> d_depth(context, pixels, "body depth map");
   gpu::Stream stream(context);
   if (faces == 0 || vertices == 0) {
-    body_depth(stream, camera, {}, 0, {}, 0, d_depth, options);
+    mesh_depth(stream, camera, {}, 0, {}, 0, d_depth, options);
     stream.submit_and_wait();
     return d_depth.download();
   }
   gpu::Buffer<float> d_positions(context, positions, "body depth: mesh positions");
   gpu::Buffer<std::uint32_t> d_triangles(context, triangles, "body depth: mesh triangles");
-  body_depth(stream, camera, d_positions, vertices, d_triangles, faces, d_depth, options);
+  mesh_depth(stream, camera, d_positions, vertices, d_triangles, faces, d_depth, options);
   stream.submit_and_wait();
   return d_depth.download();
 }
 
-std::vector<float> body_depth_ref(const DepthCamera& camera, std::span<const float> positions,
+std::vector<float> mesh_depth_ref(const DepthCamera& camera, std::span<const float> positions,
                                   std::span<const std::uint32_t> triangles) {
   validate(camera);
   check_mesh(positions, triangles);
@@ -261,4 +261,4 @@ std::vector<float> body_depth_ref(const DepthCamera& camera, std::span<const flo
   return depth;
 }
 
-}  // namespace nf::splat
+}  // namespace nf::geometry

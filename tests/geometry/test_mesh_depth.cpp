@@ -12,11 +12,11 @@
 
 #include "engine/core/error.hpp"
 #include "engine/geometry/marching_cubes.hpp"
-#include "engine/splat/body_depth.hpp"
+#include "engine/geometry/mesh_depth.hpp"
 #include "tests/support/gpu_test.hpp"
 
 using namespace nf;
-using namespace nf::splat;
+using namespace nf::geometry;
 
 namespace {
 
@@ -34,7 +34,7 @@ TriMesh mc_sphere(glm::vec3 centre, float r, float voxel) {
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i)
         values[(std::size_t(k) * n + j) * n + i] = glm::length(origin + voxel * glm::vec3(i, j, k) - centre) - r;
-  const io::Mesh m = geometry::marching_cubes(values.data(), {n, n, n}, origin, glm::vec3(voxel));
+  const geometry::Mesh m = geometry::marching_cubes(values.data(), {n, n, n}, origin, glm::vec3(voxel));
   return {m.positions, m.triangles};
 }
 
@@ -88,8 +88,8 @@ TEST_CASE("a marching-cubes sphere: GPU equals the reference, centre depth is di
   const glm::vec3 eye = centre + glm::vec3(0.3f, 0.4f, 2.0f);
   const float dist = glm::length(eye - centre);
   const DepthCamera cam = look_at(eye, centre, 160, 120, 150.0f);
-  const auto gpu = body_depth(ctx, cam, s.positions, s.triangles);
-  const auto ref = body_depth_ref(cam, s.positions, s.triangles);
+  const auto gpu = mesh_depth(ctx, cam, s.positions, s.triangles);
+  const auto ref = mesh_depth_ref(cam, s.positions, s.triangles);
   CHECK(require_match(gpu, ref) > 1000);
   // The image centre (80, 60) is a pixel corner: average the four pixels around it.
   double centre_depth = 0;
@@ -139,10 +139,10 @@ TEST_CASE("random triangles, some behind the camera or across the near plane: GP
     DepthCamera cam;
     cam.width = 200, cam.height = 150, cam.fx = cam.fy = 120, cam.cx = 100.3f, cam.cy = 74.8f;
     cam.near = 0.05f;
-    BodyDepthOptions options;
+    MeshDepthOptions options;
     options.tile = tile;
-    const auto gpu = body_depth(ctx, cam, m.positions, m.triangles, options);
-    const auto ref = body_depth_ref(cam, m.positions, m.triangles);
+    const auto gpu = mesh_depth(ctx, cam, m.positions, m.triangles, options);
+    const auto ref = mesh_depth_ref(cam, m.positions, m.triangles);
     CHECK(require_match(gpu, ref) > 5000);
     for (float d : gpu) CHECK((std::isinf(d) || d >= cam.near));
   }
@@ -157,15 +157,15 @@ TEST_CASE("a plane filling the view (big triangles): its depth everywhere, tilte
     // Fronto-parallel at depth 3, two triangles far larger than the frustum.
     const std::vector<float> flat = {-50, -50, -3, 50, -50, -3, 50, 50, -3, -50, 50, -3};
     const std::vector<std::uint32_t> quad = {0, 1, 2, 0, 2, 3};
-    const auto d = body_depth(ctx, cam, flat, quad);
+    const auto d = mesh_depth(ctx, cam, flat, quad);
     REQUIRE(d.size() == std::size_t(w) * h);
     // Exact on lavapipe; GPUs contract the interpolation's multiply-adds, so allow a few ulp.
     CHECK(std::all_of(d.begin(), d.end(), [](float x) { return std::fabs(x - 3.0f) <= 4 * 2.4e-7f * 3.0f; }));
     // Tilted: the plane z = -3 + 0.5 x.
     std::vector<float> tilted = flat;
     for (int v = 0; v < 4; ++v) tilted[3 * v + 2] = -3.0f + 0.5f * tilted[3 * v];
-    const auto t = body_depth(ctx, cam, tilted, quad);
-    require_match(t, body_depth_ref(cam, tilted, quad));
+    const auto t = mesh_depth(ctx, cam, tilted, quad);
+    require_match(t, mesh_depth_ref(cam, tilted, quad));
     for (std::uint32_t y = 0; y < h; y += std::max(1u, h / 17))
       for (std::uint32_t x = 0; x < w; x += std::max(1u, w / 23)) {
         const glm::dvec3 r = pixel_ray(cam, x, y);
@@ -180,8 +180,8 @@ TEST_CASE("a 1920x1080 sphere view and a 1x1 view agree with the reference") {
   const TriMesh s = mc_sphere(glm::vec3(0), 0.4f, 0.03f);
   for (const auto& [w, h] : {std::pair{1920u, 1080u}, std::pair{1u, 1u}}) {
     const DepthCamera cam = look_at(glm::vec3(0.2f, 0.1f, 1.5f), glm::vec3(0), w, h, 1.2f * float(w));
-    const auto gpu = body_depth(ctx, cam, s.positions, s.triangles);
-    const auto ref = body_depth_ref(cam, s.positions, s.triangles);
+    const auto gpu = mesh_depth(ctx, cam, s.positions, s.triangles);
+    const auto ref = mesh_depth_ref(cam, s.positions, s.triangles);
     CHECK(require_match(gpu, ref) == (w == 1 ? 1u : count_finite(ref)));
   }
 }
@@ -194,16 +194,16 @@ TEST_CASE("triangles behind the camera do not appear; one crossing the near plan
   const std::vector<float> behind = {-5, -5, 2, 5, -5, 2, 0, 5, 2, -0.1f, -0.1f, 0.5f, 0.1f, -0.1f, 0.5f, 0, 0.1f, 0.5f,
                                      -0.1f, -0.1f, -0.05f, 0.1f, -0.1f, -0.05f, 0, 0.1f, -0.05f};
   const std::vector<std::uint32_t> three = {0, 1, 2, 3, 4, 5, 6, 7, 8};
-  const auto d = body_depth(ctx, cam, behind, three);
+  const auto d = mesh_depth(ctx, cam, behind, three);
   CHECK(count_finite(d) == 0);
-  CHECK(count_finite(body_depth_ref(cam, behind, three)) == 0);
+  CHECK(count_finite(mesh_depth_ref(cam, behind, three)) == 0);
 
   // A floor y = -1 running from far in front of the camera to behind it: it crosses the near
   // plane and the camera plane. Below the horizon the depth is -1 / d_y; above it nothing.
   const std::vector<float> floor = {-100, -1, -100, 100, -1, -100, 0, -1, 100};
   const std::vector<std::uint32_t> one = {0, 1, 2};
-  const auto g = body_depth(ctx, cam, floor, one);
-  require_match(g, body_depth_ref(cam, floor, one));
+  const auto g = mesh_depth(ctx, cam, floor, one);
+  require_match(g, mesh_depth_ref(cam, floor, one));
   std::size_t below = 0;
   for (std::uint32_t y = 0; y < cam.height; ++y)
     for (std::uint32_t x = 0; x < cam.width; ++x) {
@@ -224,15 +224,15 @@ TEST_CASE("triangles behind the camera do not appear; one crossing the near plan
 
   // The near plane itself: a wall at depth 0.05 < near is invisible; at 0.15 it is seen.
   const std::vector<float> wall_near = {-5, -5, -0.05f, 5, -5, -0.05f, 0, 5, -0.05f};
-  CHECK(count_finite(body_depth(ctx, cam, wall_near, one)) == 0);
+  CHECK(count_finite(mesh_depth(ctx, cam, wall_near, one)) == 0);
   const std::vector<float> wall_far = {-5, -5, -0.15f, 5, -5, -0.15f, 0, 5, -0.15f};
-  const auto wf = body_depth(ctx, cam, wall_far, one);
+  const auto wf = mesh_depth(ctx, cam, wall_far, one);
   CHECK(count_finite(wf) > 1000);
-  require_match(wf, body_depth_ref(cam, wall_far, one));
+  require_match(wf, mesh_depth_ref(cam, wall_far, one));
   // A sloped triangle through the near plane: only the part beyond near is drawn.
   const std::vector<float> slope = {-1, -0.5f, 0.2f, 1, -0.5f, 0.2f, 0, 0.5f, -1.0f};
-  const auto sl = body_depth(ctx, cam, slope, one);
-  require_match(sl, body_depth_ref(cam, slope, one));
+  const auto sl = mesh_depth(ctx, cam, slope, one);
+  require_match(sl, mesh_depth_ref(cam, slope, one));
   CHECK(count_finite(sl) > 100);
   for (float x : sl) CHECK((std::isinf(x) || x >= cam.near));
 }
@@ -241,27 +241,27 @@ TEST_CASE("an empty mesh gives an empty depth map; bad input is rejected with th
   auto& ctx = test::context();
   DepthCamera cam;
   cam.width = 33, cam.height = 17, cam.fx = cam.fy = 20, cam.cx = 16, cam.cy = 8;
-  const auto d = body_depth(ctx, cam, {}, {});
+  const auto d = mesh_depth(ctx, cam, {}, {});
   REQUIRE(d.size() == 33u * 17u);
   CHECK(count_finite(d) == 0);
   const std::vector<float> pts = {0, 0, -1, 1, 0, -1, 0, 1, -1};
-  CHECK(count_finite(body_depth(ctx, cam, pts, {})) == 0);
+  CHECK(count_finite(mesh_depth(ctx, cam, pts, {})) == 0);
 
   const std::vector<std::uint32_t> bad = {0, 1, 3};
-  CHECK_THROWS_WITH_AS(body_depth(ctx, cam, pts, bad), doctest::Contains("triangle 0 uses vertex 3"), InputError);
+  CHECK_THROWS_WITH_AS(mesh_depth(ctx, cam, pts, bad), doctest::Contains("triangle 0 uses vertex 3"), InputError);
   std::vector<float> nan_pts = pts;
   nan_pts[4] = std::nanf("");
-  CHECK_THROWS_WITH_AS(body_depth(ctx, cam, nan_pts, std::vector<std::uint32_t>{0, 1, 2}),
+  CHECK_THROWS_WITH_AS(mesh_depth(ctx, cam, nan_pts, std::vector<std::uint32_t>{0, 1, 2}),
                        doctest::Contains("mesh positions"), InputError);
   DepthCamera zero = cam;
   zero.width = 0;
-  CHECK_THROWS_WITH_AS(body_depth(ctx, zero, pts, {}), doctest::Contains("camera size"), InputError);
+  CHECK_THROWS_WITH_AS(mesh_depth(ctx, zero, pts, {}), doctest::Contains("camera size"), InputError);
   DepthCamera no_near = cam;
   no_near.near = 0;
-  CHECK_THROWS_WITH_AS(body_depth_ref(no_near, pts, {}), doctest::Contains("near"), InputError);
+  CHECK_THROWS_WITH_AS(mesh_depth_ref(no_near, pts, {}), doctest::Contains("near"), InputError);
   DepthCamera no_f = cam;
   no_f.fy = -1;
-  CHECK_THROWS_WITH_AS(body_depth(ctx, no_f, pts, {}), doctest::Contains("focal"), InputError);
+  CHECK_THROWS_WITH_AS(mesh_depth(ctx, no_f, pts, {}), doctest::Contains("focal"), InputError);
 }
 
 TEST_CASE("timing: a 512x512 depth map of an ~80k-triangle mesh") {
@@ -277,15 +277,15 @@ TEST_CASE("timing: a 512x512 depth map of an ~80k-triangle mesh") {
   double best = 1e30, best_gpu = 1e30;
   for (int run = 0; run < 4; ++run) {
     const auto t0 = std::chrono::steady_clock::now();
-    stream.begin_pass("body_depth");
-    body_depth(stream, cam, positions, s.positions.size() / 3, triangles, faces, depth);
+    stream.begin_pass("mesh_depth");
+    mesh_depth(stream, cam, positions, s.positions.size() / 3, triangles, faces, depth);
     stream.end_pass();
     stream.submit_and_wait();
     best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     for (const auto& p : stream.last_pass_times()) best_gpu = std::min(best_gpu, p.milliseconds);
   }
   const auto t0 = std::chrono::steady_clock::now();
-  const auto ref = body_depth_ref(cam, s.positions, s.triangles);
+  const auto ref = mesh_depth_ref(cam, s.positions, s.triangles);
   const double cpu = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const auto got = depth.download();
   require_match(got, ref);

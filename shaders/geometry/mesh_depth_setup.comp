@@ -3,8 +3,8 @@
 // Body depth map, pass 2, one invocation per triangle: the pixel box to test. A triangle behind the
 // near plane gets none; one crossing it is clipped against depth = near (up to 4 vertices) and the
 // box is that of the projected clipped polygon, widened by `margin` pixels for rounding. A box that
-// fits one tile is rasterised here at once; a bigger one is left to body_depth_raster as
-// ceil(w / tile) * ceil(h / tile) work items. Host wrapper: engine/splat/body_depth.cpp.
+// fits one tile is rasterised here at once; a bigger one is left to mesh_depth_raster as
+// ceil(w / tile) * ceil(h / tile) work items. Host wrapper: engine/geometry/mesh_depth.cpp.
 
 layout(constant_id = 0) const uint WG = 64;
 layout(local_size_x_id = 0) in;
@@ -15,7 +15,7 @@ layout(std430, binding = 1) readonly buffer Camera { float cam[]; };          //
 layout(std430, binding = 2) writeonly buffer Boxes { uvec4 boxes[]; };        // x0, y0, x1, y1 (inclusive)
 layout(std430, binding = 3) writeonly buffer Counts { uint counts[]; };       // work items per triangle
 layout(std430, binding = 4) buffer Depth { uint depth[]; };                   // H * W float bits
-#include "nf_body_depth.glsl"
+#include "nf_mesh_depth.glsl"
 
 vec3 vertex(uint v) { return vec3(cam[3u * v], cam[3u * v + 1u], cam[3u * v + 2u]); }
 
@@ -70,7 +70,7 @@ void main() {
       box = uvec4(ix0, iy0, ix1, iy1);
       const uint tiles_x = (box.z - box.x) / pc.tile + 1u, tiles_y = (box.w - box.y) / pc.tile + 1u;
       if (tiles_x * tiles_y == 1u)
-        nf_body_depth_box(v[0], v[1], v[2], box.x, box.y, box.z, box.w);
+        nf_mesh_depth_box(v[0], v[1], v[2], box.x, box.y, box.z, box.w);
       else
         count = tiles_x * tiles_y;
     }

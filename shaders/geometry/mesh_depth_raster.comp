@@ -2,8 +2,8 @@
 #extension GL_GOOGLE_include_directive : require
 // Body depth map, pass 3: the triangles whose box spans several tiles. A fixed grid of invocations
 // strides over the (triangle, tile) work items numbered by the exclusive scan of the per-triangle
-// item counts; each item tests at most tile^2 pixel centres (nf_body_depth_box), so a
-// screen-filling triangle is spread over the whole grid. Host wrapper: engine/splat/body_depth.cpp.
+// item counts; each item tests at most tile^2 pixel centres (nf_mesh_depth_box), so a
+// screen-filling triangle is spread over the whole grid. Host wrapper: engine/geometry/mesh_depth.cpp.
 
 layout(constant_id = 0) const uint WG = 64;
 layout(local_size_x_id = 0) in;
@@ -15,7 +15,7 @@ layout(std430, binding = 2) readonly buffer Boxes { uvec4 boxes[]; };
 layout(std430, binding = 3) readonly buffer Offsets { uint offsets[]; };      // exclusive scan of counts
 layout(std430, binding = 4) readonly buffer Total { uint total; };            // all items of the chunk
 layout(std430, binding = 5) buffer Depth { uint depth[]; };                   // H * W float bits
-#include "nf_body_depth.glsl"
+#include "nf_mesh_depth.glsl"
 
 vec3 vertex(uint v) { return vec3(cam[3u * v], cam[3u * v + 1u], cam[3u * v + 2u]); }
 
@@ -34,7 +34,7 @@ void main() {
     const uint ty = local / tiles_x, tx = local - ty * tiles_x;
     const uint x0 = box.x + tx * pc.tile, y0 = box.y + ty * pc.tile;
     const uint x1 = min(x0 + pc.tile - 1u, box.z), y1 = min(y0 + pc.tile - 1u, box.w);
-    nf_body_depth_box(vertex(triangles[3u * f]), vertex(triangles[3u * f + 1u]), vertex(triangles[3u * f + 2u]),
+    nf_mesh_depth_box(vertex(triangles[3u * f]), vertex(triangles[3u * f + 1u]), vertex(triangles[3u * f + 2u]),
                       x0, y0, x1, y1);
   }
 }

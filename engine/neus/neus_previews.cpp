@@ -1,15 +1,15 @@
-#include "engine/pipeline/neus_previews.hpp"
+#include "engine/neus/neus_previews.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include "engine/geometry/mesh_depth.hpp"
 #include "engine/io/image.hpp"
-#include "engine/splat/body_depth.hpp"
 
-namespace nf::pipeline {
+namespace nf::neus {
 
-json render_neus_previews(neus::NeusField& field, const neus::NeusTrainingData& data, const io::Mesh& mesh,
+json render_neus_previews(NeusField& field, const NeusTrainingData& data, const geometry::Mesh& mesh,
                           const std::vector<std::uint32_t>& views, float h, const std::filesystem::path& out) {
   std::filesystem::create_directories(out);
   json per_view = json::array();
@@ -19,9 +19,9 @@ json render_neus_previews(neus::NeusField& field, const neus::NeusTrainingData& 
     const io::Camera& cam = data.scene.cameras[v];
     const std::size_t pixels = std::size_t(cam.width) * cam.height;
     const std::vector<float> depth = mesh.triangle_count() == 0
-                                         ? std::vector<float>(pixels, splat::kNoDepth)
-                                         : splat::body_depth(field.context(), splat::depth_camera(cam, 1e-4f),
-                                                             mesh.positions, mesh.triangles);
+                                         ? std::vector<float>(pixels, geometry::kNoDepth)
+                                         : geometry::mesh_depth(field.context(), geometry::depth_camera(cam, 1e-4f),
+                                                                mesh.positions, mesh.triangles);
     std::vector<glm::vec3> points, dirs;
     std::vector<std::size_t> where;
     const glm::dvec3 eye(cam.camera_to_world[3]);
@@ -34,7 +34,7 @@ json render_neus_previews(neus::NeusField& field, const neus::NeusTrainingData& 
       dirs.push_back(glm::vec3(glm::normalize(world - eye)));
       where.push_back(p);
     }
-    const neus::NeusField::Shading shading = field.shade(points, dirs, h);
+    const NeusField::Shading shading = field.shade(points, dirs, h);
     io::Image rgb{cam.width, cam.height, 3, std::vector<float>(pixels * 3, 0.f)};
     io::Image normal{cam.width, cam.height, 3, std::vector<float>(pixels * 3, 0.f)};
     io::Image depth_png{cam.width, cam.height, 1, std::vector<float>(pixels, 0.f)};
@@ -93,4 +93,4 @@ json render_neus_previews(neus::NeusField& field, const neus::NeusTrainingData& 
   return result;
 }
 
-}  // namespace nf::pipeline
+}  // namespace nf::neus

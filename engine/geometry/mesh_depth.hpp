@@ -1,8 +1,9 @@
 #pragma once
-// Depth of the furless body mesh at every pixel of a view: the occluder that hides strand Gaussians
-// behind the body. Shaders: shaders/splat/body_depth_{vertices,setup,raster}.comp.
+// Depth of a triangle mesh at every pixel of a view: the strand splatter's occluder (the furless
+// body hides strand Gaussians behind it) and the surface stage's previews (depth, normals, colour).
+// Shaders: shaders/geometry/mesh_depth_{vertices,setup,raster}.comp.
 //
-// Conventions (engine/io/scene.hpp Camera::project): camera space in OpenGL axes, the camera looks
+// Conventions (as io::Camera::project): camera space in OpenGL axes, the camera looks
 // down -z, depth = -z_cam; pixel (x, y) covers [x, x+1) x [y, y+1), image y down; depth is sampled
 // at pixel centres. The ray of pixel (x, y) is d = ((x + 0.5 - cx) / fx, -(y + 0.5 - cy) / fy, -1)
 // in camera space, so a point t * d lies at depth t.
@@ -43,9 +44,8 @@
 #include "engine/gpu/buffer.hpp"
 #include "engine/gpu/context.hpp"
 #include "engine/gpu/stream.hpp"
-#include "engine/io/scene.hpp"
 
-namespace nf::splat {
+namespace nf::geometry {
 
 inline constexpr float kNoDepth = std::numeric_limits<float>::infinity();
 
@@ -56,8 +56,10 @@ struct DepthCamera {
   float near = 0.01f;               // scene units; hits closer than this are ignored
 };
 
-// From a scene camera (its camera-to-world pose inverted in double, then rounded to float).
-inline DepthCamera depth_camera(const io::Camera& camera, float near = 0.01f) {
+// From a scene camera (io::Camera or anything with its fields): its camera-to-world pose inverted
+// in double, then rounded to float.
+template <class Camera>
+DepthCamera depth_camera(const Camera& camera, float near = 0.01f) {
   DepthCamera c;
   c.world_to_camera = glm::mat4(glm::inverse(camera.camera_to_world));
   c.fx = float(camera.fx), c.fy = float(camera.fy), c.cx = float(camera.cx), c.cy = float(camera.cy);
@@ -66,7 +68,7 @@ inline DepthCamera depth_camera(const io::Camera& camera, float near = 0.01f) {
   return c;
 }
 
-struct BodyDepthOptions {
+struct MeshDepthOptions {
   std::uint32_t tile = 8;  // tile side in pixels: the most pixels one work item tests is tile^2
 };
 
@@ -78,17 +80,17 @@ void validate(const DepthCamera& camera);
 // kNoDepth where no triangle covers the pixel centre). positions: vertex_count * 3 floats (world),
 // triangles: triangle_count * 3 uint32 (trusted: indices < vertex_count, finite positions; the host
 // overload checks). The vertex array must fit one storage-buffer binding (DeviceError otherwise).
-void body_depth(gpu::Stream& stream, const DepthCamera& camera, gpu::BufferRange positions,
+void mesh_depth(gpu::Stream& stream, const DepthCamera& camera, gpu::BufferRange positions,
                 std::uint64_t vertex_count, gpu::BufferRange triangles, std::uint64_t triangle_count,
-                gpu::BufferRange depth, const BodyDepthOptions& options = {});
+                gpu::BufferRange depth, const MeshDepthOptions& options = {});
 
 // Host convenience (upload, run, download). Rejects NaN/Inf positions and out-of-range indices
 // with an InputError naming the input and the element.
-std::vector<float> body_depth(gpu::Context& context, const DepthCamera& camera, std::span<const float> positions,
-                              std::span<const std::uint32_t> triangles, const BodyDepthOptions& options = {});
+std::vector<float> mesh_depth(gpu::Context& context, const DepthCamera& camera, std::span<const float> positions,
+                              std::span<const std::uint32_t> triangles, const MeshDepthOptions& options = {});
 
 // CPU reference: the same maths in straight loops (every triangle, every pixel of its box).
-std::vector<float> body_depth_ref(const DepthCamera& camera, std::span<const float> positions,
+std::vector<float> mesh_depth_ref(const DepthCamera& camera, std::span<const float> positions,
                                   std::span<const std::uint32_t> triangles);
 
-}  // namespace nf::splat
+}  // namespace nf::geometry

@@ -1,8 +1,8 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // Body depth map, pass 1: world -> camera space, one invocation per vertex. The products and sums
-// are `precise` and in the order of the CPU reference (engine/splat/body_depth.cpp), so both give
-// the same bits. Host wrapper: engine/splat/body_depth.cpp.
+// are `precise` and in the order of the CPU reference (engine/geometry/mesh_depth.cpp), so both give
+// the same bits. Host wrapper: engine/geometry/mesh_depth.cpp.
 
 layout(constant_id = 0) const uint WG = 64;
 layout(local_size_x_id = 0) in;

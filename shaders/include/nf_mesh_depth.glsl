@@ -1,10 +1,10 @@
-// Body depth map (engine/splat/body_depth.hpp): the push constants shared by the setup and raster
+// Body depth map (engine/geometry/mesh_depth.hpp): the push constants shared by the setup and raster
 // kernels and the per-pixel test of one triangle over a pixel box. The CPU twin is in
-// engine/splat/body_depth.cpp; every float operation is `precise` and in the same order there, so
+// engine/geometry/mesh_depth.cpp; every float operation is `precise` and in the same order there, so
 // both give the same bits (no FMA contraction).
 // Include after declaring `layout(std430, binding = ...) buffer Depth { uint depth[]; };`.
-#ifndef NF_BODY_DEPTH_GLSL
-#define NF_BODY_DEPTH_GLSL
+#ifndef NF_MESH_DEPTH_GLSL
+#define NF_MESH_DEPTH_GLSL
 
 layout(push_constant) uniform Push {
   float fx, fy, inv_fx, inv_fy, cx, cy;
@@ -18,7 +18,7 @@ layout(push_constant) uniform Push {
 
 // Nearest depth >= near of the ray of every pixel centre of [x0, x1] x [y0, y1] (inclusive) that
 // meets triangle (a, b, c), camera space; atomicMin on the float bits (valid for positive floats).
-void nf_body_depth_box(vec3 a, vec3 b, vec3 c, uint x0, uint y0, uint x1, uint y1) {
+void nf_mesh_depth_box(vec3 a, vec3 b, vec3 c, uint x0, uint y0, uint x1, uint y1) {
   // Edge normals a x b, b x c, c x a written out: a neighbour's shared edge gives exact negatives.
   precise vec3 k0 = vec3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
   precise vec3 k1 = vec3(b.y * c.z - b.z * c.y, b.z * c.x - b.x * c.z, b.x * c.y - b.y * c.x);

@@ -1,0 +1,40 @@
+#pragma once
+// Where commands write. An output never lies inside an input folder (after resolving `..` and
+// symlinks), and a command never replaces a file that nf_gpu did not write: each output folder
+// keeps a record (.nf_gpu_outputs) of the files nf_gpu wrote into it, and only those may be
+// replaced by a later run. One guard for every command that writes.
+#include <filesystem>
+#include <set>
+#include <string>
+
+namespace nf {
+
+// True when `path` is `folder` or lies inside it (both resolved through `..` and symlinks).
+bool path_inside(const std::filesystem::path& path, const std::filesystem::path& folder);
+
+// UsageError when `out` lies inside `input_folder`: "<option> OUT lies inside the <what> folder ...".
+void refuse_output_inside(const std::filesystem::path& out, const std::filesystem::path& input_folder,
+                          const std::string& option, const std::string& what);
+
+// InputError when `path` exists and is not a folder (an `--out` that names a file).
+void require_folder_or_absent(const std::filesystem::path& path, const std::string& option);
+
+class OutputFolder {
+ public:
+  // Creates the folder when missing. InputError when `dir` is an existing file or cannot be made.
+  OutputFolder(std::filesystem::path dir, std::string option = "--out");
+  const std::filesystem::path& dir() const { return dir_; }
+  // The path of `name` in the folder, claimed for writing: InputError when a file of that name
+  // exists and nf_gpu did not write it here. The claim is recorded before the caller writes, so a
+  // run killed mid-write may replace its own half-written file next time.
+  std::filesystem::path claim(const std::string& name);
+
+  static constexpr const char* kRecordName = ".nf_gpu_outputs";
+
+ private:
+  std::filesystem::path dir_;
+  std::string option_;
+  std::set<std::string> written_;
+};
+
+}  // namespace nf

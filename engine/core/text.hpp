@@ -1,0 +1,22 @@
+#pragma once
+// Small text helpers for messages people read.
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace nf {
+
+// Levenshtein distance (insertions, deletions, substitutions; bytes).
+std::size_t edit_distance(std::string_view a, std::string_view b);
+
+// The candidate closest to `word` when it is close enough to be a likely typo (at most a third of
+// its length, and at least 2, edits away), else "". Ties go to the earlier candidate.
+std::string closest_match(std::string_view word, const std::vector<std::string>& candidates);
+
+// " (did you mean 'x'?)" for closest_match, or "" when nothing is close.
+std::string did_you_mean(std::string_view word, const std::vector<std::string>& candidates);
+
+// "a, b, c"
+std::string join(const std::vector<std::string>& items, std::string_view separator = ", ");
+
+}  // namespace nf
