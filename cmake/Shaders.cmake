@@ -4,8 +4,18 @@
 #   //! variant sum_f32 -DOP_SUM -DTYPE=float
 # A shader without variant lines is built once under its plain name. glslangValidator writes a
 # depfile, so editing a shaders/include/*.glsl rebuilds exactly the shaders that include it.
+# TABLE names the generated table function (default shader_table, the runtime's); INCLUDE_DIR the
+# GLSL include folder (default <shader_root>/include). Tests build their own shaders into another
+# table (tests/shaders), so the runtime embeds no test-only kernel.
 
 function(nf_compile_shaders target shader_root)
+  cmake_parse_arguments(NF "" "TABLE;INCLUDE_DIR" "" ${ARGN})
+  if(NOT NF_TABLE)
+    set(NF_TABLE shader_table)
+  endif()
+  if(NOT NF_INCLUDE_DIR)
+    set(NF_INCLUDE_DIR "${shader_root}/include")
+  endif()
   file(GLOB_RECURSE sources CONFIGURE_DEPENDS "${shader_root}/*.comp")
   list(SORT sources)
   set(out_dir "${CMAKE_CURRENT_BINARY_DIR}/spirv")
@@ -38,7 +48,7 @@ function(nf_compile_shaders target shader_root)
       file(MAKE_DIRECTORY "${header_dir}")  # Makefile generators do not create output folders
       add_custom_command(
         OUTPUT "${header}"
-        COMMAND ${NF_GLSLANG} --target-env vulkan1.2 -I${shader_root}/include
+        COMMAND ${NF_GLSLANG} --target-env vulkan1.2 -I${NF_INCLUDE_DIR}
                 --depfile "${depfile}" --vn ${symbol} ${spec_list} -o "${header}" "${src}"
         DEPENDS "${src}"
         DEPFILE "${depfile}"
@@ -59,7 +69,7 @@ function(nf_compile_shaders target shader_root)
 #include <vector>
 @registry_includes@
 namespace nf::gpu::detail {
-const std::vector<std::pair<std::string_view, std::span<const std::uint32_t>>>& shader_table() {
+const std::vector<std::pair<std::string_view, std::span<const std::uint32_t>>>& @NF_TABLE@() {
   static const std::vector<std::pair<std::string_view, std::span<const std::uint32_t>>> table = {
 @registry_entries@  };
   return table;

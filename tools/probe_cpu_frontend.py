@@ -2,7 +2,7 @@
 """Does the size of an unrolled kernel body limit lavapipe's multiply-add rate on this CPU?
 
 Measures the instruction pattern that lavapipe (Mesa 22.3, LLVM 15, AVX-512VL) emits for the MLP
-layer kernel (shaders/nn/mlp_forward.comp): per input vec4 and output row, four multiplies by a
+layer kernel (shaders/nn/mlp_fwd.comp): per input vec4 and output row, four multiplies by a
 weight broadcast from memory (`vmulps mem{1to8}`), four adds, the accumulator kept on the stack.
 llvmpipe lowers every fused multiply-add to a multiply and an add (lower_ffma32 in lp_screen.c),
 so this is also what the core bench's FMA loop runs. The same pattern is timed as one body of

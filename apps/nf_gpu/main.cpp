@@ -165,6 +165,7 @@ int run_render(const nf::synth::PreviewOptions& options) {
 }
 
 int run_bench(const nf::bench::Options& options, const std::string& json_path, bool profile) {
+  if (!json_path.empty()) nf::bench::check_records_file(json_path);
   nf::gpu::Context context;
   const json records = nf::bench::run_suite(context, options);
   std::cout << records.dump(2) << "\n";

@@ -1,5 +1,9 @@
 #include "engine/bench/suites.hpp"
 
+#include <algorithm>
+#include <fstream>
+#include <sstream>
+
 #include "engine/bench/core_suite.hpp"
 #include "engine/bench/neus_suite.hpp"
 #include "engine/bench/nn_suite.hpp"
@@ -19,7 +23,26 @@ json run_suite(gpu::Context& context, const Options& options) {
   throw UsageError("unknown bench suite '" + options.suite + "'");
 }
 
+void check_records_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) return;
+  const std::string text((std::istreambuf_iterator<char>(in)), {});
+  const auto is_record = [](const json& r) { return r.is_object() && r.contains("suite") && r.contains("case"); };
+  json whole = json::parse(text, nullptr, false);
+  bool ours = whole.is_array() && std::all_of(whole.begin(), whole.end(), is_record);
+  if (!ours && !text.empty()) {
+    ours = true;
+    std::istringstream lines(text);
+    for (std::string line; std::getline(lines, line);)
+      if (!line.empty()) ours &= is_record(json::parse(line, nullptr, false));
+  }
+  if (!ours && !text.empty())
+    throw InputError("--json " + path + " exists and does not hold nf_gpu bench records; it is never replaced: choose "
+                     "another file");
+}
+
 void write_records(const std::string& path, const json& records) {
+  check_records_file(path);
   // `.jsonl`: one record per line (easy to append and stream); anything else: one JSON array.
   if (path.size() > 6 && path.substr(path.size() - 6) == ".jsonl") {
     std::string lines;

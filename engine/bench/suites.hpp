@@ -24,6 +24,10 @@ std::vector<std::string> suite_names();
 json run_suite(gpu::Context& context, const Options& options);
 // Writes the records atomically: JSON lines for a `.jsonl` path, else one JSON array. A record may
 // carry "curve": {"x", "y", "points": [[x, y], ...]}, an error-against-time series.
+// InputError when a file at `path` exists and does not hold bench records (a JSON array of objects
+// with "suite" and "case", or one such object per line): nf_gpu never replaces a file it did not
+// write. The CLI checks before a suite runs; write_records checks again.
+void check_records_file(const std::string& path);
 void write_records(const std::string& path, const json& records);
 
 }  // namespace nf::bench

@@ -10,18 +10,18 @@
 namespace nf::nn {
 namespace {
 
-// mlp_forward: output rows per workgroup block (32 accumulators per lane, its c32s1 variant) and
+// mlp_fwd: output rows per workgroup block (32 accumulators per lane, its c32s1 variant) and
 // samples per workgroup at most (a larger workgroup spreads the staging of its weights over more
 // samples; 512 measured the same as 256 on lavapipe).
 constexpr std::uint32_t kForwardCols = 32;
 constexpr std::uint32_t kMaxForwardGroup = 256;
-// Input vec4 per mlp_forward dispatch at most: a 256-wide layer in one (its body is unrolled).
+// Input vec4 per mlp_fwd dispatch at most: a 256-wide layer in one (its body is unrolled).
 constexpr std::uint32_t kMaxInputChunk4 = 64;
-// mlp_backward_weights: inputs per block (accumulators per lane, its COLS) and samples per slab at
+// mlp_weights_bwd: inputs per block (accumulators per lane, its COLS) and samples per slab at
 // most (a slab's block of inputs is staged in shared memory, 16 bytes per 4 inputs of a sample).
 constexpr std::uint32_t kWeightCols = 32;
 constexpr std::uint32_t kMaxSlab4 = 64;
-// Outputs (lanes) per mlp_backward_weights workgroup at most: enough to spread the staging of a
+// Outputs (lanes) per mlp_weights_bwd workgroup at most: enough to spread the staging of a
 // slab (4 % of the work at 256), few enough for any GPU.
 constexpr std::uint32_t kMaxWeightGroup = 256;
 constexpr std::uint32_t kMaxInferenceChunk = 1u << 16;
@@ -50,7 +50,7 @@ struct ReducePartialsPush {
   std::uint32_t weights, biases, slabs, weight_offset, bias_offset, accumulate, slab_stride4;
 };
 
-// Floats between mlp_backward_weights' slab copies of a layer's gradient: whole vec4.
+// Floats between mlp_weights_bwd' slab copies of a layer's gradient: whole vec4.
 std::uint64_t slab_stride(const LayerShape& l) { return std::uint64_t(l.out) * l.in_stride + (l.out + 3) / 4 * 4; }
 
 }  // namespace
@@ -63,7 +63,7 @@ Mlp::Mlp(gpu::Context& context, const MlpConfig& config, const std::string& name
     throw DeviceError("mlp: the device's " + std::to_string(context_.info().limits.max_compute_shared_memory) +
                       " bytes of shared memory cannot hold a block of " + std::to_string(kForwardCols) +
                       " weight rows");
-  // mlp_forward reads a layer's weights, and the input adjoint their transpose, as one texel view.
+  // mlp_fwd reads a layer's weights, and the input adjoint their transpose, as one texel view.
   const std::uint64_t texels = context_.info().limits.max_texel_buffer_elements;
   for (std::size_t li = 0; li < layers_.size(); ++li) {
     const LayerShape& l = layers_[li];
@@ -95,7 +95,7 @@ std::uint32_t Mlp::slabs(std::uint32_t batch) const {
 }
 
 std::uint32_t Mlp::forward_chunk4() const {
-  // mlp_forward stages kForwardCols rows of the chunk's inputs (16 bytes per vec4) in shared memory.
+  // mlp_fwd stages kForwardCols rows of the chunk's inputs (16 bytes per vec4) in shared memory.
   return std::min(kMaxInputChunk4, context_.info().limits.max_compute_shared_memory / (16 * kForwardCols));
 }
 
@@ -116,7 +116,7 @@ void Mlp::record_product(gpu::Stream& stream, const Product& p, gpu::BufferRange
     const std::uint32_t chunk4 = std::min(most4, in4 - k4);
     const bool first_chunk = k4 == 0, last_chunk = k4 + chunk4 == in4;
     const bool store_z = last_chunk && z.size, epilogue = last_chunk && adjoint.below.size;
-    const gpu::Kernel& k = context_.kernel("nn/mlp_forward:c32s1",
+    const gpu::Kernel& k = context_.kernel("nn/mlp_fwd:c32s1",
                                            {{0, group_size},
                                             {3, chunk4},
                                             {4, std::uint32_t(last_chunk ? p.activation.type : Activation::None)},
@@ -231,7 +231,7 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
     const gpu::BufferRange dz = buffers[li % 2]->range(0, count);  // interleaved
     const gpu::BufferRange dzt = ws.grad_zt_->range(0, std::uint64_t(l.out) * zt_stride);
     if (last) {  // below the top layer, the input adjoint above has written dz and dz^T
-      const gpu::Kernel& act = context_.kernel("nn/mlp_activation_backward",
+      const gpu::Kernel& act = context_.kernel("nn/mlp_activation_bwd",
                                                {{0, workgroup_limit(256)}, {1, std::uint32_t(l.activation.type)}});
       stream.dispatch(act, {dz, dzt, grad_output, ws.kept(li)},
                       ActivationBackwardPush{std::uint32_t(interleaved_rows(batch) / 4), batch, l.out,
@@ -242,7 +242,7 @@ void Mlp::backward(gpu::Stream& stream, Workspace& ws, gpu::BufferRange input, g
     // One lane per output: as few workgroups across the outputs as the device allows, evened out.
     const std::uint32_t o_groups = (l.out + widest_group - 1) / widest_group;
     const std::uint32_t group_size = ((l.out + o_groups - 1) / o_groups + kRowGroup - 1) / kRowGroup * kRowGroup;
-    const gpu::Kernel& weights = context_.kernel("nn/mlp_backward_weights", {{0, group_size}, {1, slab4()}});
+    const gpu::Kernel& weights = context_.kernel("nn/mlp_weights_bwd", {{0, group_size}, {1, slab4()}});
     const std::uint32_t i_blocks = (l.in_stride + kWeightCols - 1) / kWeightCols;
     const std::uint32_t groups = o_groups * i_blocks * slab_count;
     stream.dispatch(weights, {ws.partials_->whole(), dzt, x},

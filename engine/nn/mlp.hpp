@@ -73,7 +73,7 @@ class Mlp {
   struct Layouts {
     std::uint32_t x_interleaved, y_interleaved;
   };
-  // The input adjoint's epilogue for a hidden layer below (mlp_forward.comp, ADJOINT): the product
+  // The input adjoint's epilogue for a hidden layer below (mlp_fwd.comp, ADJOINT): the product
   // times that layer's activation derivative, written as its dz and, transposed, as its dz^T.
   struct AdjointEpilogue {
     gpu::BufferRange below;  // the layer's output (pre-activation for Sine); empty: no epilogue
@@ -85,9 +85,9 @@ class Mlp {
                       gpu::BufferRange z, std::uint32_t batch, Layouts layouts, const AdjointEpilogue& adjoint) const;
   void record_layer_forward(gpu::Stream& stream, const LayerShape& layer, gpu::BufferRange x, gpu::BufferRange y,
                             gpu::BufferRange z, std::uint32_t batch, Layouts layouts) const;
-  // Input vec4 per mlp_forward dispatch on this device (its weight block fills shared memory).
+  // Input vec4 per mlp_fwd dispatch on this device (its weight block fills shared memory).
   std::uint32_t forward_chunk4() const;
-  // mlp_backward_weights' samples per slab / 4 on this device (its input block fills shared
+  // mlp_weights_bwd' samples per slab / 4 on this device (its input block fills shared
   // memory), and the slabs of a batch.
   std::uint32_t slab4() const;
   std::uint32_t slabs(std::uint32_t batch) const;

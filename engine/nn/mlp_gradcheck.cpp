@@ -71,7 +71,7 @@ Case softplus_big_case() {
   return c;
 }
 
-// Layers wider than one mlp_forward dispatch: 300 inputs split into chunks that accumulate (64 + 11
+// Layers wider than one mlp_fwd dispatch: 300 inputs split into chunks that accumulate (64 + 11
 // vec4 with 32 KiB of shared memory) and outputs into row blocks with a short last one (70 = 32 +
 // 32 + 6). Finite differences over ~25k parameters would take minutes; the small cases cover them,
 // so this one checks the device against the reference only.

@@ -8,6 +8,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "engine/body/quadruped.hpp"
+#include "engine/core/output_guard.hpp"
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/log.hpp"
@@ -54,7 +55,7 @@ json mat_json(const glm::mat4& m) {
 // The output folder must be new, or an earlier synth output when overwriting is allowed.
 void check_destination(const fs::path& out, bool overwrite) {
   if (!fs::exists(out)) return;
-  if (!fs::is_directory(out)) throw UsageError(out.string() + " exists and is not a folder; choose another --out");
+  require_folder_or_absent(out, "--out");
   if (fs::is_empty(out)) return;
   const bool ours = fs::exists(out / "gt" / "scene.json") && fs::exists(out / "transforms.json");
   if (!ours) throw UsageError(out.string() + " exists and is not an nf_gpu synth scene; nothing was written (choose another --out)");

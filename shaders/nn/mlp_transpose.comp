@@ -1,7 +1,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // Transposed copy of one layer's weights for the input adjoint: wt[k][o] = w[o][k], rows of
-// out_stride floats (padding zero), so dx = W^T dz runs through mlp_forward.
+// out_stride floats (padding zero), so dx = W^T dz runs through mlp_fwd.
 
 layout(constant_id = 0) const uint WG = 256;
 layout(local_size_x_id = 0) in;

@@ -122,6 +122,14 @@ TEST_CASE("nf_gpu bench --suite core writes the roofline records") {
     if (rec["case"] == "fma_f32") CHECK(rec["metrics"]["GFLOPs_wall"].get<double>() > 0);
   }
   std::filesystem::remove(path);
+  // A file that is not bench records is never replaced, and the refusal comes before the run.
+  std::ofstream(path) << "my notes";
+  const Result foreign = run("bench --suite core --quick --json " + path.string());
+  CHECK(foreign.code == 1);
+  CHECK(foreign.output.find("never replaced") != std::string::npos);
+  std::ifstream notes(path);
+  CHECK(std::string(std::istreambuf_iterator<char>(notes), {}) == "my notes");
+  std::filesystem::remove(path);
 }
 
 TEST_CASE("without any Vulkan driver the error says which Debian package to install") {

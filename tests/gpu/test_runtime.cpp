@@ -116,7 +116,7 @@ TEST_CASE("kernels are reflected from their embedded SPIR-V") {
                        InternalError);
   CHECK_THROWS_AS(ctx.kernel("bench/core_copy", {{0, 100000}}), DeviceError);
   // Uniform texel buffers (samplerBuffer) are read-only bindings from kTexelBindingBase on.
-  const Kernel& texel = ctx.kernel("nn/mlp_backward_weights");
+  const Kernel& texel = ctx.kernel("nn/mlp_weights_bwd");
   REQUIRE(texel.layout().bindings.size() == 3);
   CHECK(texel.layout().bindings[0].kind == BindingKind::storage);
   CHECK(texel.layout().bindings[1].kind == BindingKind::texel);
@@ -145,7 +145,7 @@ TEST_CASE("dispatch asserts binding count, push-constant size and binding ranges
   CHECK_THROWS_WITH_AS(require_bytes(a.range(0, 4), 32, "probe"), doctest::Contains("probe: range of 16 bytes"),
                        InternalError);
   // A texel-buffer range is read as whole RGBA32F texels (a push block of the kernel's size).
-  const Kernel& texel = ctx.kernel("nn/mlp_backward_weights");
+  const Kernel& texel = ctx.kernel("nn/mlp_weights_bwd");
   REQUIRE(texel.layout().push_constant_size == sizeof(std::array<std::uint32_t, 8>));
   CHECK_THROWS_WITH_AS(s.dispatch(texel, {a, b.range(0, 3), b}, std::array<std::uint32_t, 8>{}, Elements(1)),
                        doctest::Contains("not a whole number of vec4 texels"), InternalError);

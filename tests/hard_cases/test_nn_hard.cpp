@@ -95,7 +95,7 @@ TEST_CASE("an MLP handles empty batches and batches of any size") {
 TEST_CASE("MLP gradients over several slabs and odd widths match the reference") {
   auto& ctx = test::context();
   MlpConfig c;
-  c.input_dim = 300;     // 75 input vec4: two chunks of mlp_forward; 10 input blocks, the last short
+  c.input_dim = 300;     // 75 input vec4: two chunks of mlp_fwd; 10 input blocks, the last short
   c.hidden = {270, 36};  // 270 outputs: two weight-gradient workgroups; its input adjoint: 9 row blocks
   c.output_dim = 5;
   c.hidden_activation = {Activation::Softplus, 2.f, 30.f};

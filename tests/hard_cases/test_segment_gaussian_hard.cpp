@@ -34,10 +34,24 @@ TEST_CASE("zero-length strands become isotropic Gaussians of the strand width, w
     CHECK(c[3] == doctest::Approx(1e-4));
     CHECK(c[5] == doctest::Approx(1e-4));
     CHECK(c[1] == 0.f);
+    // d = 0: C = eps^2 I exactly (the d d^T term vanishes), checked relative to eps^2 = 1e-4 (the
+    // Approx above allows ~1e-5 absolute); the mean is the common point.
+    for (int k : {0, 3, 5}) CHECK(c[k] / 1e-4 == doctest::Approx(1.0).epsilon(1e-6));
+    CHECK(c[2] == 0.f);
+    CHECK(c[4] == 0.f);
+    for (int j = 0; j < 3; ++j) CHECK(g.means[s * 3 + j] == doctest::Approx(0.25).epsilon(1e-7));
   }
   const std::vector<float> gm(shape.segments() * 3, 1.f), gc(shape.segments() * 6, 1.f);
   const auto grad = segment_gaussians_backward(ctx, shape, params, pts, gm, gc);
   CHECK(finite(grad));
+  // d = 0 makes dL/dd = 2 a H d + (...) d = 0, so only the means pull: a point gets 1/2 of dL/dmean = 1
+  // from each segment it bounds, i.e. 1/2 at a strand's two ends and 1 inside.
+  REQUIRE(grad.size() == shape.points() * 3);
+  for (std::uint64_t i = 0; i < shape.points(); ++i) {
+    const std::uint32_t l = std::uint32_t(i % shape.points_per_strand);
+    const double want = (l == 0 || l + 1 == shape.points_per_strand) ? 0.5 : 1.0;
+    for (int j = 0; j < 3; ++j) CHECK(grad[i * 3 + j] == doctest::Approx(want).epsilon(1e-6));
+  }
 }
 
 TEST_CASE("covariances stay symmetric positive definite from 1e-6 to 1e3 scene units") {

@@ -69,6 +69,37 @@ void require_finite_result(const VolumeRenderResult& res) {
   }
 }
 
+// The value every output and gradient of run(r, anneal) should have: the double reference on the same
+// input. Outputs (in [0, 1]) within `out_tol`; each gradient array within `tol` of its largest
+// reference magnitude plus `floor`, as float cancels in dalpha/dsdf where the sigmoid is flat
+// (p ~ c) and the gradients there are ~0.
+void check_reference(const Rays& r, const VolumeRenderResult& res, float anneal, double out_tol, double tol,
+                     double floor) {
+  const auto widen = [](const std::vector<float>& v) { return std::vector<double>(v.begin(), v.end()); };
+  const std::vector<double> sd = widen(r.sdf), cd = widen(r.cos), dd = widen(r.dist), rd = widen(r.rgb);
+  const std::vector<double> gc(r.rays() * 3, double(0.7f)), go(r.rays(), double(-0.3f));  // as run() passes them
+  const VolumeRenderInputs<double> in{sd, cd, dd, rd, double(r.inv_s)};
+  const auto out = volume_render_forward_ref<double>(r.rays(), r.samples, in, anneal);
+  const auto g = volume_render_backward_ref<double>(r.rays(), r.samples, in, anneal, gc, go);
+  const auto worst = [](const std::vector<float>& got, const std::vector<double>& want, double& largest) {
+    REQUIRE(got.size() == want.size());
+    double err = 0;
+    largest = 0;
+    for (std::size_t i = 0; i < want.size(); ++i) {
+      err = std::max(err, std::fabs(got[i] - want[i]));
+      largest = std::max(largest, std::fabs(want[i]));
+    }
+    return err;
+  };
+  double scale = 0;
+  CHECK(worst(res.outputs.opacity, out.opacity, scale) <= out_tol);
+  CHECK(worst(res.outputs.colour, out.colour, scale) <= out_tol);
+  CHECK(worst(res.grads.sdf, g.sdf, scale) <= tol * scale + floor);
+  CHECK(worst(res.grads.cos, g.cos, scale) <= tol * scale + floor);
+  CHECK(worst(res.grads.rgb, g.rgb, scale) <= tol * scale + floor);
+  CHECK(std::fabs(res.grads.inv_s - g.inv_s) <= 10 * tol * std::fabs(g.inv_s) + floor);  // a sum: more rounding
+}
+
 }  // namespace
 
 TEST_CASE("ray missing the object: opacity ~ 0, finite gradients") {
@@ -77,21 +108,79 @@ TEST_CASE("ray missing the object: opacity ~ 0, finite gradients") {
   const auto res = run(r);
   require_finite_result(res);
   for (float o : res.outputs.opacity) CHECK(o < 1e-3f);
+  // sdf +- |h| >= 0.47 and inv_s = 64: p = c = 1 in float (1 - e^-30 in double), so every sample
+  // has only the guard's alpha a = 1e-5 / (1 + 1e-5), T_i = q^i with q = 1 - a + 1e-7; the colour
+  // is sum_i a q^i rgb_i and dL/drgb_i = a q^i gcol. dalpha/dsdf, dalpha/dcos and dalpha/dinv_s are
+  // ~ inv_s e^-30 ~ 1e-12: those gradients are 0.
+  const double a = 1e-5 / (1 + 1e-5), q = 1 - a + 1e-7;
+  for (std::uint64_t ray = 0; ray < r.rays(); ++ray) {
+    CHECK(res.outputs.opacity[ray] / (a * (1 - std::pow(q, 64)) / (1 - q)) == doctest::Approx(1.0).epsilon(1e-4));
+    for (int ch = 0; ch < 3; ++ch) {
+      double colour = 0;
+      for (int i = 0; i < 64; ++i) colour += a * std::pow(q, i) * r.rgb[(ray * 64 + i) * 3 + ch];
+      CHECK(res.outputs.colour[ray * 3 + ch] / colour == doctest::Approx(1.0).epsilon(1e-4));
+    }
+  }
+  for (std::size_t k = 0; k < r.sdf.size(); ++k) {
+    for (int ch = 0; ch < 3; ++ch)
+      CHECK(res.grads.rgb[k * 3 + ch] / (a * std::pow(q, k % 64) * 0.7f) == doctest::Approx(1.0).epsilon(1e-4));
+    CHECK(res.grads.sdf[k] == doctest::Approx(0.0).epsilon(1e-9));
+    CHECK(res.grads.cos[k] == doctest::Approx(0.0).epsilon(1e-9));
+  }
+  CHECK(res.grads.inv_s == doctest::Approx(0.0).epsilon(1e-9));
 }
 
 TEST_CASE("ray starting inside: all sdf < 0") {
   Rays r(4, 64, 2);
   for (float& s : r.sdf) s = -0.5f - std::fabs(s);
-  require_finite_result(run(r));
+  const auto res = run(r);
+  require_finite_result(res);
+  // sdf +- |h| <= -0.47 and inv_s = 64: p, c <= e^-30 << 1e-5, so the first sample has
+  // alpha = 1 - c / (p + 1e-5) = 1 (float; 1 - 1e-8 in double) and leaves T = 1e-7 behind it:
+  // opacity 1 (+1e-7), colour = rgb of the first sample, dL/drgb = gcol there and ~1e-7 after.
+  // dalpha/dsdf ~ inv_s c / 1e-5 is 1e-7 at most (4e-14 for these rays), and less for cos and inv_s:
+  // those gradients are 0.
+  for (std::uint64_t ray = 0; ray < r.rays(); ++ray) {
+    CHECK(res.outputs.opacity[ray] == doctest::Approx(1.0).epsilon(1e-6));
+    for (int ch = 0; ch < 3; ++ch) {
+      CHECK(res.outputs.colour[ray * 3 + ch] == doctest::Approx(r.rgb[ray * 64 * 3 + ch]).epsilon(1e-6));
+      CHECK(res.grads.rgb[ray * 64 * 3 + ch] == doctest::Approx(0.7).epsilon(1e-6));
+      for (int i = 1; i < 64; ++i) CHECK(res.grads.rgb[(ray * 64 + i) * 3 + ch] == doctest::Approx(0.0).epsilon(1e-6));
+    }
+  }
+  for (std::size_t k = 0; k < r.sdf.size(); ++k) {
+    CHECK(res.grads.sdf[k] == doctest::Approx(0.0).epsilon(1e-9));
+    CHECK(res.grads.cos[k] == doctest::Approx(0.0).epsilon(1e-9));
+  }
+  CHECK(res.grads.inv_s == doctest::Approx(0.0).epsilon(1e-9));
 }
 
 TEST_CASE("extreme inv_s: 1e6 and 1e-6") {
   for (float inv_s : {1e6f, 1e-6f}) {
+    CAPTURE(inv_s);
     Rays r(8, 64, 3);
     r.inv_s = inv_s;
     r.sdf[5] = 0.f;  // exactly on the surface
-    require_finite_result(run(r, 0.f));
-    require_finite_result(run(r, 1.f));
+    for (float anneal : {0.f, 1.f}) {
+      CAPTURE(anneal);
+      const auto res = run(r, anneal);
+      require_finite_result(res);
+      // The reference: at 1e6 every sigmoid saturates and all gradients are 0 in both; at 1e-6 the
+      // flat sigmoid leaves dalpha/dsdf ~ 1e-11, which float gets only to ~1% (p - c is below its
+      // resolution), hence the 1e-6 floor.
+      check_reference(r, res, anneal, 1e-5, 1e-4, 1e-6);
+      // 1e6: a step. Before the surface alpha is the guard's 1e-5 / (1 + 1e-5), at the first sample
+      // inside p = 0 and alpha = 1, so opacity = 1 (+ 1e-7 per sample before). 1e-6: p ~ c ~ 1/2 for
+      // every sample, alpha = 1e-5 / (1/2 + 1e-5) (+ inv_s |h| ~ 1e-8), compounded as in the miss case.
+      const double a = 1e-5 / (0.5 + 1e-5), q = 1 - a + 1e-7, flat = a * (1 - std::pow(q, 64)) / (1 - q);
+      for (float o : res.outputs.opacity) {
+        if (inv_s > 1.f) {
+          CHECK(o == doctest::Approx(1.0).epsilon(1e-5));
+        } else {
+          CHECK(o / flat == doctest::Approx(1.0).epsilon(2e-3));
+        }
+      }
+    }
   }
 }
 
@@ -105,6 +194,8 @@ TEST_CASE("zero-length sections and cos on the kinks") {
     require_finite_result(res);
     // dist = 0 and cos = 0 or 1 (anneal = 0): iter_cos * dist = 0, so dL/dcos = 0 there.
     for (std::size_t i = 0; i < r.cos.size(); i += 2) CHECK(res.grads.cos[i] == 0.f);
+    // Everywhere else: the reference (the kinks take subgradient 0 in both).
+    check_reference(r, res, anneal, 1e-5, 1e-4, 1e-7);
   }
 }
 
@@ -117,6 +208,8 @@ TEST_CASE("one ray, one sample") {
   const std::vector<double> s{0.0}, c{-0.5}, d(r.dist.begin(), r.dist.end()), rgb(r.rgb.begin(), r.rgb.end());
   const auto ref = volume_render_forward_ref<double>(1, 1, {s, c, d, rgb, 64.0}, 0.5);
   CHECK(res.outputs.opacity[0] == doctest::Approx(ref.opacity[0]).epsilon(1e-5));
+  // And the colour and every gradient (|h| = 0.625 dist / 2 ~ 0.35: alpha ~ 1, colour ~ rgb).
+  check_reference(r, res, 0.5f, 1e-5, 1e-4, 1e-7);
 }
 
 TEST_CASE("NaN/Inf and wrong sizes are rejected by name") {

@@ -4,7 +4,6 @@
 // cell). Hard cases: a camera inside the unit sphere, an all-zero mask, an empty class.
 #include <doctest/doctest.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -269,14 +268,4 @@ TEST_CASE("hard case: an all-zero mask contributes background rays only; empty c
   neus::RaySampleOptions zero;
   zero.inside_share = zero.band_share = zero.background_share = 0.f;
   CHECK_THROWS_AS(neus::sample_rays(pool, f.scene, f.norm, nullptr, 10, 1, zero), InputError);
-}
-
-TEST_CASE("timing: 100k rays with a 128^3 hull") {
-  const Fixture f = make_fixture(128);
-  const neus::RayPool pool = neus::build_ray_pool(f.scene, f.masks);
-  const auto t0 = std::chrono::steady_clock::now();
-  const auto rays = neus::sample_rays(pool, f.scene, f.norm, &f.hull, 100000, 1);
-  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  CHECK(rays.size() == 100000);
-  MESSAGE("sample_rays: 100000 rays, hull " << f.hull.dims.x << "^3: " << ms << " ms");
 }

@@ -6,7 +6,12 @@
 #include <cstdio>
 #include <memory>
 
+#include "engine/gpu/shader_registry.hpp"
 #include "tests/support/gpu_test.hpp"
+
+namespace nf::gpu::detail {
+const ShaderTable& test_shader_table();  // tests/shaders, built by tests/CMakeLists.txt
+}
 
 namespace nf::test {
 std::unique_ptr<gpu::Context>& holder() {
@@ -23,6 +28,7 @@ bool context_created() { return holder() != nullptr; }
 }  // namespace nf::test
 
 int main(int argc, char** argv) {
+  nf::gpu::register_shaders(nf::gpu::detail::test_shader_table());
   doctest::Context runner(argc, argv);
   int result = runner.run();
   if (nf::test::context_created()) {

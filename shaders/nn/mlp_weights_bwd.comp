@@ -8,7 +8,7 @@
 // A workgroup owns WG outputs (one per lane) x a block of COLS inputs x one slab. It first stages
 // the block's inputs for the slab's samples in shared memory; after the barrier every input is
 // read at a constant offset outside any loop or branch, the one load lavapipe (Mesa 22.3) turns
-// into a single broadcast without a bounds check (see mlp_forward.comp). Each lane then fetches
+// into a single broadcast without a bounds check (see mlp_fwd.comp). Each lane then fetches
 // its output's dz for four samples at a time from the transposed copy dz^T (written by the
 // activation adjoint for the top layer, by the input adjoint above for hidden ones; one texel
 // fetch, a straight-line gather, per 128 multiply-adds) and keeps COLS sums in registers. The slab is

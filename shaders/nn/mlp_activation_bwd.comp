@@ -4,8 +4,8 @@
 // dL/dz = dL/dy * act'(z) for an MLP's top layer, elementwise over [batch][out_stride]: the
 // caller's output gradient and the layer's kept tensor are sample-major, dz goes out lane-
 // interleaved (nf_rows.glsl) for the input adjoint, and transposed ([out][zt_stride], samples
-// contiguous) for the weight gradient (mlp_backward_weights.comp); padding columns and padding
-// samples get zero. Hidden layers get theirs from the input adjoint above (mlp_forward.comp,
+// contiguous) for the weight gradient (mlp_weights_bwd.comp); padding columns and padding
+// samples get zero. Hidden layers get theirs from the input adjoint above (mlp_fwd.comp,
 // ADJOINT). An invocation takes four samples of one vec4 of columns, so that it writes whole vec4
 // to both (on lavapipe each store loops over the lanes; neighbouring lanes take neighbouring
 // groups of four samples). Reads are texel fetches (straight-line gathers on lavapipe, where
