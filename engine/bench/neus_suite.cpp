@@ -31,15 +31,16 @@ struct TempFolder {
   }
 };
 
-// CPU ray selection for one training step's worth of rays and more: the pool of mask classes is
+// CPU ray selection (the shares the trainer uses) for 100,000 rays: the pool of mask classes is
 // built once per scene, then every step draws its rays (and clips them to the hull) from it.
-json ray_sampling_record(gpu::Context& ctx, const neus::NeusTrainingData& data, const Options& options) {
+json ray_sampling_record(gpu::Context& ctx, const neus::NeusTrainingData& data, const neus::RaySampleOptions& shares,
+                         const Options& options) {
   const neus::RayPool pool = neus::build_ray_pool(data.scene, data.masks);
   const std::uint32_t count = 100000;
   std::vector<neus::Ray> rays;
   unsigned seed = 1;
   const Timing timing = time_repeats(options.quick ? 3 : 10, nullptr, [&] {
-    rays = neus::sample_rays(pool, data.scene, data.norm, &data.hull, count, seed++);
+    rays = neus::sample_rays(pool, data.scene, data.norm, &data.hull, count, seed++, shares);
     return -1.0;
   });
   std::array<double, neus::kRayClassCount> share{};
@@ -81,7 +82,7 @@ json run_neus_suite(gpu::Context& ctx, const Options& options) {
   data.hull.occupied_bounds(lo, hi);
   const double diagonal_mm = glm::length(hi - lo) * cm_per_unit * 10.0;
 
-  json records = json::array({ray_sampling_record(ctx, data, options)});
+  json records = json::array({ray_sampling_record(ctx, data, quality.training.ray_options, options)});
   const metrics::SurfaceMetrics hull_metrics =
       metrics::surface_metrics(neus::hull_surface(neus::carve_visual_hull(scene, quality.hull)), reference, cm_per_unit, 5.0, 50000, 1);
   log::info("bench neus: the visual hull alone: chamfer ", hull_metrics.chamfer_mean_mm, " mm (",

@@ -252,7 +252,7 @@ geometry::Mesh extract_surface(const Skeleton& s, float voxel) {
   return mesh;
 }
 
-// The rules that turn the nearest part into a DESIGN §5 region.
+// The rules that turn the nearest part into one of the method's regions (regions.hpp).
 Region region_rule(const QuadrupedProportions& p, const Skeleton& s, const Primitive& prim, glm::vec3 v, glm::vec3 n) {
   const glm::vec3 head = s.head;
   const bool near_tail_root = glm::distance(v, s.tail_root) < 2.2f * s.tail_root_radius && v.y < s.tail_root.y + 0.2f * s.tail_root_radius;

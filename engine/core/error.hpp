@@ -1,5 +1,5 @@
 #pragma once
-// Typed errors. Each carries the process exit code the CLI returns for it (DESIGN §10):
+// Typed errors. Each carries the process exit code the CLI returns for it (README, Exit codes):
 // 1 bad input (the message names the file, field or value), 2 usage, 3 device or internal error,
 // 130 stopped by Ctrl-C (128 + SIGINT, as shells report it).
 #include <stdexcept>

@@ -1,6 +1,6 @@
 #pragma once
 // Private to engine/gpu: the Vulkan headers and the checked-call macro. Nothing outside engine/gpu
-// includes this file (DESIGN §2); the public headers expose no Vulkan type.
+// includes this file (the house rule: Vulkan stays in engine/gpu); the public headers expose no Vulkan type.
 #include <vulkan/vulkan.h>
 
 #include <string>

@@ -1,5 +1,5 @@
 #pragma once
-// The gradient-check protocol of DESIGN §4, for any differentiable kernel:
+// The gradient-check protocol (README, gradcheck), for any differentiable kernel:
 //   1. GPU forward  == CPU reference forward (float)
 //   2. GPU adjoint  == CPU reference adjoint (float)
 //   3. CPU reference adjoint (double) == central finite differences of the reference (double)

@@ -1,6 +1,6 @@
 #pragma once
 // A multi-view scene: per camera, pinhole intrinsics, the camera-to-world pose in the OpenGL
-// convention (x right, y up, the camera looks down -z; DESIGN §5) and where its image and mask are.
+// convention (x right, y up, the camera looks down -z) and where its image and mask are.
 // Readers for the formats users have (nerfstudio / instant-ngp transforms.json, NeuS
 // cameras_sphere.npz, Artemis CamPose.inf, COLMAP text models) all produce this; images are opened
 // lazily by the stages that need them.

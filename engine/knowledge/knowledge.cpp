@@ -6,6 +6,7 @@
 
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/text.hpp"
 #include "engine/knowledge/presets.hpp"
 
 namespace nf::knowledge {
@@ -50,7 +51,10 @@ Knowledge knowledge_from_json(const json& j, const std::string& source) {
   for (const auto& [name, entry] : j["regions"].items()) {
     const std::string where = source + ": regions." + name;
     const auto region = body::region_from_name(name);
-    if (!region) throw InputError(where + ": unknown region (DESIGN §5 names, e.g. body, tail, face)");
+    if (!region) {
+      std::vector<std::string> names(body::kRegionNames.begin(), body::kRegionNames.end());
+      throw InputError(where + ": unknown region" + did_you_mean(name, names) + "; the regions: " + join(names));
+    }
     if (!entry.is_object()) throw InputError(where + " must be an object");
     RegionKnowledge r;
     for (const char* key : {"length_cm", "thickness_cm", "direction"})

@@ -1,5 +1,5 @@
 #pragma once
-// Per-region fur knowledge (DESIGN §5): length and effective thickness in cm and the growth
+// Per-region fur knowledge: length and effective thickness in cm and the growth
 // direction in the animal frame, for every region. Read from knowledge.json with every field
 // validated (errors name the file, the region and the field), written atomically, and available
 // as built-in presets for the animals the paper annotates (assets/knowledge/, embedded at build).

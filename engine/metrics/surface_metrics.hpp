@@ -1,5 +1,5 @@
 #pragma once
-// Surface metrics on sampled points (DESIGN §7): two-way chamfer (mean / min / max over both
+// Surface metrics on sampled points (the paper's supplementary, Metrics): two-way chamfer (mean / min / max over both
 // directions' nearest distances, and each direction's mean), normal consistency and F-score at a
 // distance, in mm through the scene scale; and the two-way chamfer between strand tips and the
 // outer surface (the paper's CD).

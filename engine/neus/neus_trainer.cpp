@@ -18,7 +18,7 @@
 namespace nf::neus {
 namespace {
 
-constexpr float kInvSMin = 1e-6f, kInvSMax = 1e6f;  // ENGINE-NOTES: exp(10 v) clipped
+constexpr float kInvSMin = 1e-6f, kInvSMax = 1e6f;  // NeuS: inv_s = exp(10 v), clipped
 constexpr std::uint32_t kCheckpointVersion = 1;
 
 std::uint64_t mix(std::uint64_t a, std::uint64_t b) {

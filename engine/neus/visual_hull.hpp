@@ -1,6 +1,6 @@
 #pragma once
 // The first step of the surface stage: a visual hull carved from the cameras' masks, the occupancy
-// grid the NeuS sampler starts from (rays and samples only where the animal can be, DESIGN §6, §8),
+// grid the NeuS sampler starts from (rays and samples only where the animal can be),
 // and the scene normalisation that maps the hull into the unit sphere NeuS trains in.
 //
 // CPU code (threads over z-slabs via parallel_for). A GPU version can come later; the

@@ -172,25 +172,25 @@ const SettingsSchema<neus::NeusQuality>& neus_settings() {
     s.add("steps", [](Q& q) -> auto& { return q.training.steps; }, 1, 1e8, "training steps")
         .add("rays", [](Q& q) -> auto& { return q.training.rays; }, 1, 1 << 20, "rays per step")
         .add("samples_per_ray", [](Q& q) -> auto& { return q.training.samples_per_ray; }, 2, 1024,
-             "samples along each ray (coarse + fine)")
+             "samples per ray, coarse and fine together (rays x samples_per_ray at most 2^22)")
         .add("fine_samples", [](Q& q) -> auto& { return q.training.fine_samples; }, 0, 1023,
-             "of samples_per_ray, placed by NeuS up-sampling (0: all stratified)")
-        .add("seed", [](Q& q) -> auto& { return q.training.seed; }, 0, 4294967295.0, "random seed (rays, initialisation)")
+             "of samples_per_ray, placed by NeuS up-sampling near the surface; below samples_per_ray (0: all stratified)")
+        .add("seed", [](Q& q) -> auto& { return q.training.seed; }, 0, 4294967295.0, "random seed (rays, samples, initialisation)")
         .add("hull_fit_steps", [](Q& q) -> auto& { return q.training.hull_fit_steps; }, 0, 1e6,
-             "steps fitting the SDF to the visual hull before rendering starts")
-        .add("lr", [](Q& q) -> auto& { return q.training.lr; }, 1e-7, 1, "learning rate of the hash grid and MLPs")
-        .add("variance_lr", [](Q& q) -> auto& { return q.training.variance_lr; }, 0, 1, "learning rate of NeuS's variance")
+             "steps fitting the SDF to the visual hull before rendering starts (0: start from a sphere)")
+        .add("lr", [](Q& q) -> auto& { return q.training.lr; }, 1e-7, 1, "learning rate of the hash table and the networks (warm-up, then cosine decay)")
+        .add("variance_lr", [](Q& q) -> auto& { return q.training.variance_lr; }, 0, 1, "learning rate of the inverse variance")
         .add("sharpness", [](Q& q) -> auto& { return q.training.sharpness; }, 0, 100,
-             "scheduled inv_s >= sharpness / finite-difference step (0: learned variance only)")
+             "inv_s is kept at least sharpness / h (h: the finite-difference step); 0: learned only")
         .add("max_scheduled_inv_s", [](Q& q) -> auto& { return q.training.max_scheduled_inv_s; }, 0, 1e6,
-             "cap of the scheduled inv_s")
-        .add("colour_weight", [](Q& q) -> auto& { return q.training.weights.colour; }, 0, 1e6, "weight of the colour L1 loss")
-        .add("mask_weight", [](Q& q) -> auto& { return q.training.weights.mask; }, 0, 1e6, "weight of the mask BCE loss")
+             "the cap of that floor")
+        .add("colour_weight", [](Q& q) -> auto& { return q.training.weights.colour; }, 0, 1e6, "weight of the colour L1 loss (rays inside the masks)")
+        .add("mask_weight", [](Q& q) -> auto& { return q.training.weights.mask; }, 0, 1e6, "weight of the mask binary cross-entropy (every ray)")
         .add("eikonal_weight", [](Q& q) -> auto& { return q.training.eikonal; }, 0, 1e6, "weight of the Eikonal loss")
         .add("checkpoint_interval", [](Q& q) -> auto& { return q.training.checkpoint_interval; }, 0, 1e8,
              "steps between checkpoints (0: none; Ctrl-C always saves one)")
         .add("mesh_resolution", [](Q& q) -> auto& { return q.mesh_resolution; }, 8, 2048,
-             "marching-cubes cells along the longest axis of the surface's box")
+             "marching-cubes cells along the longest axis of the hull's box")
         .add("hull_resolution", [](Q& q) -> auto& { return q.hull.resolution; }, 8, 2048,
              "visual-hull cells along the longest axis of its box")
         .check([](const Q& q) { q.training.validate(); });

@@ -1,5 +1,5 @@
 #pragma once
-// A stage of `nf_gpu reconstruct` (DESIGN §1): it names the files it reads and the parameters that
+// A stage of `nf_gpu reconstruct`: it names the files it reads and the parameters that
 // change its result, and writes its outputs into a folder the framework gives it. Everything else
 // (hashing, skipping, atomic replacement, resume folders, records) is the framework's
 // (pipeline.hpp), so adding a stage is writing one of these and listing it in stages.cpp.

@@ -1,5 +1,5 @@
 #pragma once
-// The stages of `nf_gpu reconstruct`, in order (DESIGN §1), and the command itself. A new stage
+// The stages of `nf_gpu reconstruct`, in order (README, Stages of reconstruct), and the command itself. A new stage
 // is one more line in stages.cpp; the framework (pipeline.hpp) needs no change.
 #include <memory>
 #include <string>

@@ -53,7 +53,7 @@ TEST_CASE("every animal's template is a closed manifold with valid skinning") {
   }
 }
 
-TEST_CASE("regions: every region of DESIGN §5 is present, mane only on the lion, each where anatomy puts it") {
+TEST_CASE("regions: every region of the method is present, mane only on the lion, each where anatomy puts it") {
   for (const std::string& animal : known_animals()) {
     CAPTURE(animal);
     const BodyModel& m = model_of(animal);

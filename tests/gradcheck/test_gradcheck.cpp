@@ -1,4 +1,4 @@
-// Every differentiable kernel of the catalog passes the four checks of DESIGN §4 on all its cases,
+// Every differentiable kernel of the catalog passes the four checks of the gradcheck protocol (engine/gradcheck/harness.hpp) on all its cases,
 // and the harness itself catches a wrong adjoint, a wrong forward and a NaN.
 #include <doctest/doctest.h>
 

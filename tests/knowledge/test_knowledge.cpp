@@ -68,6 +68,9 @@ TEST_CASE("bad knowledge names the region and the field") {
   j["regions"]["wing"] = j["regions"]["tail"];
   CHECK_THROWS_WITH_AS(knowledge_from_json(j, "k.json"), doctest::Contains("regions.wing: unknown region"), InputError);
   j = base();
+  j["regions"]["nose_tip"] = j["regions"]["tail"];  // a near miss is named
+  CHECK_THROWS_WITH_AS(knowledge_from_json(j, "k.json"), doctest::Contains("did you mean 'nosetip'"), InputError);
+  j = base();
   j["regions"]["tail"].erase("length_cm");
   CHECK_THROWS_WITH_AS(knowledge_from_json(j, "k.json"), doctest::Contains("regions.tail: missing field 'length_cm'"), InputError);
   j = base();
