@@ -65,12 +65,12 @@ std::string expand_path(const std::string& path, void*) { return path; }
 bool read_whole_file(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
   auto& access = *static_cast<FileAccess*>(user);
   std::ifstream in(path, std::ios::binary);
-  if (in) out->assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  if (!in && !in.eof()) {
+  if (!in) {
     access.problem = "cannot read " + path;
     *err = access.problem;
     return false;
   }
+  out->assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   access.path = path;
   access.size = out->size();
   return true;
@@ -224,7 +224,7 @@ class Loader {
       number(a, "byteOffset", where);
       const std::uint64_t component = required(a, "componentType", where);
       if (component < 5120 || component > 5130)
-        fail(where + ".componentType " + str(component) + " is not a glTF component type (5120..5126)");
+        fail(where + ".componentType " + str(component) + " is not a glTF component type (BYTE 5120 to FLOAT 5126)");
       required(a, "count", where);
       const auto type = a.find("type");
       static const std::vector<std::string> types = {"SCALAR", "VEC2", "VEC3", "VEC4", "MAT2", "MAT3", "MAT4"};

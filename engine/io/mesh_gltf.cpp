@@ -125,6 +125,7 @@ class MeshBuilder {
     const std::string view_name = item("bufferViews", std::uint64_t(a.bufferView));
     const tinygltf::BufferView& bv = model_.bufferViews[std::size_t(a.bufferView)];
     const std::vector<unsigned char>& data = model_.buffers[std::size_t(bv.buffer)].data;
+    // gltf_model.cpp checked this against the declared byteLength; here it guards the bytes loaded.
     if (bv.byteOffset > data.size() || bv.byteLength > data.size() - bv.byteOffset)
       fail(view_name + ": byteOffset " + str(bv.byteOffset) + " + byteLength " + str(bv.byteLength) + " exceeds buffers[" +
            str(std::uint64_t(bv.buffer)) + "] (" + str(data.size()) + " bytes)");

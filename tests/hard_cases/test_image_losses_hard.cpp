@@ -132,8 +132,18 @@ TEST_CASE("an empty mask and a full mask give the silhouette loss and gradient s
       } else {
         CHECK(r.grads.alpha[i] < 0.f);
       }
+      // dL_sil/dalpha = weight sign(alpha - mask) / N_sil, N_sil = sum of weights (upstream factor 1).
+      CHECK(r.grads.alpha[i] * den == doctest::Approx((target == 0.f ? 1.0 : -1.0) * v.weight[i]).epsilon(1e-5));
     }
   }
+  // A full mask under a full prediction: |alpha - mask| = 0 everywhere, so no loss, and the kink's
+  // subgradient sign(0) = 0 gives no gradient.
+  View v(37, 23, 2);
+  std::fill(v.mask.begin(), v.mask.end(), 1.f);
+  std::fill(v.alpha.begin(), v.alpha.end(), 1.f);
+  const auto r = image_losses_with_gradients(ctx, v.size, v.inputs(), v.targets(), 1.f, 1.f);
+  CHECK(r.values.silhouette == 0.f);
+  CHECK(all_zero(r.grads.alpha));
 }
 
 TEST_CASE("weight zero everywhere gives zero losses and zero gradients, no NaN") {
@@ -144,6 +154,9 @@ TEST_CASE("weight zero everywhere gives zero losses and zero gradients, no NaN")
   CHECK(r.values.silhouette == 0.f);
   CHECK(r.values.orientation == 0.f);
   CHECK(r.values.silhouette_norm == doctest::Approx(1e-6));  // the normaliser guard
+  // Both normalisers are the guard itself (relative: Approx's default allows ~1e-5 absolute).
+  CHECK(r.values.silhouette_norm / 1e-6 == doctest::Approx(1.0).epsilon(1e-6));
+  CHECK(r.values.orientation_norm / 1e-6 == doctest::Approx(1.0).epsilon(1e-6));
   CHECK(all_zero(r.grads.alpha));
   CHECK(all_zero(r.grads.orientation));
   CHECK(all_zero(r.grads.tau));
@@ -159,6 +172,10 @@ TEST_CASE("a rendered orientation of exactly zero has no orientation term and ze
   CHECK(all_zero(r.grads.orientation));
   CHECK(all_zero(r.grads.tau));
   CHECK(finite(r.grads.alpha));
+  // The silhouette term does not see the orientation: as the reference has it.
+  const auto ref = reference(v, 0.1, 1000.0);
+  CHECK(r.values.silhouette == doctest::Approx(ref.values.silhouette).epsilon(1e-5));
+  CHECK(rel_error(r.grads.alpha, ref.grads.alpha) < 1e-5);
   // Just above the gate (|o| = 2e-6) the gradient is large, ~1/|o|, but finite.
   std::fill(v.orientation.begin(), v.orientation.begin() + v.size.pixels(), 2e-6f);
   const auto tiny = image_losses_with_gradients(ctx, v.size, v.inputs(), v.targets(), 0.1f, 1000.f);
@@ -166,6 +183,12 @@ TEST_CASE("a rendered orientation of exactly zero has no orientation term and ze
   CHECK(finite(tiny.grads.tau));
   CHECK(std::isfinite(tiny.values.orientation));
   CHECK(tiny.values.orientation > 0.f);
+  // o = (2e-6, 0): beta = 0 exactly, and dL/do = a w t s (0, 2e-6) / (2 (2e-6)^2 N_dir) is well
+  // conditioned however large: the reference gives every value.
+  const auto tiny_ref = reference(v, 0.1, 1000.0);
+  CHECK(tiny.values.orientation == doctest::Approx(tiny_ref.values.orientation).epsilon(1e-5));
+  CHECK(rel_error(tiny.grads.orientation, tiny_ref.grads.orientation) < 1e-4);
+  CHECK(rel_error(tiny.grads.tau, tiny_ref.grads.tau) < 1e-5);
 }
 
 TEST_CASE("tau = 0 uses the floor: finite loss, zero tau gradient, finite orientation gradient") {

@@ -166,4 +166,29 @@ TEST_CASE("Softplus at huge beta*x stays finite, forward and backward") {
   for (float v : grad_in.download()) CHECK(std::isfinite(v));
   for (float v : mlp.gradients().download()) CHECK(std::isfinite(v));
   CHECK(out[0] == doctest::Approx(2e6).epsilon(1e-4));  // two units pass 1e6 each, two are ~0
+  // Hidden pre-activations are z = w x = +-1e6 (x = +-1e3) or 0 (x = 0). Softplus passes 1e6 (beta z
+  // > 20: identity, slope 1) and gives 0 for -1e6 (exp(-1e8) = 0, slope 0); at 0 it is log(2) / beta
+  // with slope 1/2. So sample 1 mirrors sample 0, and sample 2 outputs 4 log(2) / 100.
+  const std::uint32_t out_row = mlp.output_stride(), in_row = mlp.input_stride();
+  CHECK(out[out_row] == doctest::Approx(2e6).epsilon(1e-4));
+  CHECK(out[2 * out_row] * 25 == doctest::Approx(std::log(2.0)).epsilon(1e-5));
+  // dL/dout = 1 per sample and output weights 1, so dL/dz = the slopes: (0, 1, 0, 1) for x = 1e3,
+  // (1, 0, 1, 0) for x = -1e3, 1/2 each for x = 0. dL/dx = sum_k slope_k w_k: 2e3, -2e3 and
+  // (-1e3 + 1e3 - 1e3 + 1e3) / 2 = 0.
+  const std::vector<float> gin = grad_in.download();
+  CHECK(gin[0] == doctest::Approx(2e3).epsilon(1e-6));
+  CHECK(gin[in_row] == doctest::Approx(-2e3).epsilon(1e-6));
+  CHECK(gin[2 * in_row] == doctest::Approx(0.0).epsilon(1e-3));  // 0 +- the rounding of 4 terms of 500
+  // Parameter gradients summed over the 3 samples: input weight k: sum slope x = w_k (each unit is
+  // on for the one sample of its sign, and x = 0 adds nothing); its bias: 1 + 1/2; output weight k:
+  // sum y = 1e6 + log(2) / 100; output bias: 3.
+  const std::vector<float> grads = mlp.gradients().download();
+  for (std::uint32_t k = 0; k < 4; ++k) {
+    CAPTURE(k);
+    const std::uint64_t w = l0.weight_offset + k * l0.in_stride;
+    CHECK(grads[w] == doctest::Approx(params[w]).epsilon(1e-6));
+    CHECK(grads[l0.bias_offset + k] == doctest::Approx(1.5).epsilon(1e-5));
+    CHECK(grads[l1.weight_offset + k] == doctest::Approx(1e6 + std::log(2.0) / 100).epsilon(1e-6));
+  }
+  CHECK(grads[l1.bias_offset] == doctest::Approx(3.0).epsilon(1e-6));
 }

@@ -83,6 +83,32 @@ TEST_CASE("rasteriser hard cases agree with the reference and stay finite") {
     const std::size_t plane = 32 * 32, centre = 16 * 32 + 16;
     CHECK(image[centre] > 0.1f);                                   // the strand is seen ...
     CHECK(std::fabs(image[plane + centre]) < 0.05f * image[centre]);  // ... with no orientation
+    // The known footprint. d = (0, 0, -0.2) projects to w = J d = 0, so each segment's o2 = 0 / gamma = 0
+    // and S = eps^2 J J^T + 0.3 I = (eps^2 (f/z)^2 + 0.3) I: an isotropic Gaussian at the image centre
+    // (16, 16), opacity sqrt(det(J M J^T) / det S) = eps^2 (f/z)^2 / var, at depths z = 1.8, 2, 2.2,
+    // composited front to back with the continuous 1/255 cut-off (confidence 1: that channel = alpha).
+    const double eps2 = 0.02 * 0.02, f = 60, a_min = 1.0 / 255.0;
+    for (std::uint32_t y = 0; y < 32; ++y)
+      for (std::uint32_t x = 0; x < 32; ++x) {
+        const double r2 = (x + 0.5 - 16) * (x + 0.5 - 16) + (y + 0.5 - 16) * (y + 0.5 - 16);
+        double transmittance = 1, depth = 0;
+        for (int l = 0; l < 3; ++l) {
+          const double z = 2 - 0.5 * (double(pts[3 * l + 2]) + double(pts[3 * l + 5]));
+          const double s0 = eps2 * (f / z) * (f / z), var = s0 + 0.3;
+          const double r = std::min(0.99, s0 / var * std::exp(-0.5 * r2 / var));
+          const double alpha = r < a_min ? 0.0 : (r - a_min) / (1 - a_min);
+          depth += alpha * transmittance * z;
+          transmittance *= 1 - alpha;
+        }
+        const std::size_t i = y * 32 + x;
+        CAPTURE(x);
+        CAPTURE(y);
+        CHECK(image[i] == doctest::Approx(1 - transmittance).epsilon(1e-5));
+        CHECK(image[plane + i] == 0.f);
+        CHECK(image[2 * plane + i] == 0.f);
+        CHECK(image[3 * plane + i] == doctest::Approx(1 - transmittance).epsilon(1e-5));
+        CHECK(image[4 * plane + i] == doctest::Approx(depth).epsilon(1e-5));
+      }
   }
   SUBCASE("segments behind the camera and crossing the near plane") {
     std::vector<float> pts;
@@ -95,6 +121,11 @@ TEST_CASE("rasteriser hard cases agree with the reference and stay finite") {
     const std::vector<float> image = rasterize(ctx, {1, 5}, pts, std::vector<float>(4, 1.0f), front_camera(16, 16), params());
     CHECK(max_abs(image) == 0.0);
     check_against_reference(ctx, 1, 5, pts, front_camera(16, 16), params());
+    // Every segment is culled, so the adjoint gives it nothing: exactly 0, not just within tolerance.
+    const RasterGradients g = rasterize_backward(ctx, {1, 5}, pts, std::vector<float>(4, 1.0f), front_camera(16, 16), params(),
+                                                 {}, std::vector<float>(5 * 16 * 16, 1.0f));
+    CHECK(max_abs(g.points) == 0.0);
+    CHECK(max_abs(g.confidence) == 0.0);
   }
   SUBCASE("a 1x1 image") {
     std::vector<float> pts = {-0.1f, 0, 0, 0, 0.01f, 0, 0.1f, 0, 0};
@@ -107,6 +138,11 @@ TEST_CASE("rasteriser hard cases agree with the reference and stay finite") {
     const std::vector<float> image = rasterize(ctx, {1, 3}, pts, std::vector<float>(2, 1.0f), cam, params(), body);
     CHECK(max_abs(image) == 0.0);
     check_against_reference(ctx, 1, 3, pts, cam, params(), body);
+    // No pixel composites a hidden Gaussian, so its projected gradient stays 0 and so do the points'.
+    const RasterGradients g = rasterize_backward(ctx, {1, 3}, pts, std::vector<float>(2, 1.0f), cam, params(), body,
+                                                 std::vector<float>(5 * 24 * 24, 1.0f));
+    CHECK(max_abs(g.points) == 0.0);
+    CHECK(max_abs(g.confidence) == 0.0);
   }
   SUBCASE("more than 10,000 Gaussians in one tile") {
     const std::uint32_t strands = 180, L = 60;  // 10,620 segments inside one 16x16 tile

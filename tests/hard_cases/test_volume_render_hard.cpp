@@ -70,34 +70,35 @@ void require_finite_result(const VolumeRenderResult& res) {
 }
 
 // The value every output and gradient of run(r, anneal) should have: the double reference on the same
-// input. Outputs (in [0, 1]) within `out_tol`; each gradient array within `tol` of its largest
-// reference magnitude plus `floor`, as float cancels in dalpha/dsdf where the sigmoid is flat
+// input. Outputs (in [0, 1]) within `out_tol`; each gradient array within `rtol` of its largest
+// reference magnitude plus `atol`, as float cancels in dalpha/dsdf where the sigmoid is flat
 // (p ~ c) and the gradients there are ~0.
-void check_reference(const Rays& r, const VolumeRenderResult& res, float anneal, double out_tol, double tol,
-                     double floor) {
+void check_reference(const Rays& r, const VolumeRenderResult& res, float anneal, double out_tol, double rtol,
+                     double atol) {
   const auto widen = [](const std::vector<float>& v) { return std::vector<double>(v.begin(), v.end()); };
   const std::vector<double> sd = widen(r.sdf), cd = widen(r.cos), dd = widen(r.dist), rd = widen(r.rgb);
   const std::vector<double> gc(r.rays() * 3, double(0.7f)), go(r.rays(), double(-0.3f));  // as run() passes them
   const VolumeRenderInputs<double> in{sd, cd, dd, rd, double(r.inv_s)};
   const auto out = volume_render_forward_ref<double>(r.rays(), r.samples, in, anneal);
   const auto g = volume_render_backward_ref<double>(r.rays(), r.samples, in, anneal, gc, go);
-  const auto worst = [](const std::vector<float>& got, const std::vector<double>& want, double& largest) {
+  // max |got - want| <= rel_tol * max |want| + abs_tol.
+  const auto agrees = [](const char* what, const std::vector<float>& got, const std::vector<double>& want,
+                         double rel_tol, double abs_tol) {
     REQUIRE(got.size() == want.size());
-    double err = 0;
-    largest = 0;
+    double err = 0, largest = 0;
     for (std::size_t i = 0; i < want.size(); ++i) {
       err = std::max(err, std::fabs(got[i] - want[i]));
       largest = std::max(largest, std::fabs(want[i]));
     }
-    return err;
+    INFO(what << ": largest error " << err << ", largest reference value " << largest);
+    CHECK(err <= rel_tol * largest + abs_tol);
   };
-  double scale = 0;
-  CHECK(worst(res.outputs.opacity, out.opacity, scale) <= out_tol);
-  CHECK(worst(res.outputs.colour, out.colour, scale) <= out_tol);
-  CHECK(worst(res.grads.sdf, g.sdf, scale) <= tol * scale + floor);
-  CHECK(worst(res.grads.cos, g.cos, scale) <= tol * scale + floor);
-  CHECK(worst(res.grads.rgb, g.rgb, scale) <= tol * scale + floor);
-  CHECK(std::fabs(res.grads.inv_s - g.inv_s) <= 10 * tol * std::fabs(g.inv_s) + floor);  // a sum: more rounding
+  agrees("opacity", res.outputs.opacity, out.opacity, 0, out_tol);
+  agrees("colour", res.outputs.colour, out.colour, 0, out_tol);
+  agrees("dL/dsdf", res.grads.sdf, g.sdf, rtol, atol);
+  agrees("dL/dcos", res.grads.cos, g.cos, rtol, atol);
+  agrees("dL/drgb", res.grads.rgb, g.rgb, rtol, atol);
+  CHECK(std::fabs(res.grads.inv_s - g.inv_s) <= 10 * rtol * std::fabs(g.inv_s) + atol);  // a sum: more rounding
 }
 
 }  // namespace
@@ -112,18 +113,20 @@ TEST_CASE("ray missing the object: opacity ~ 0, finite gradients") {
   // has only the guard's alpha a = 1e-5 / (1 + 1e-5), T_i = q^i with q = 1 - a + 1e-7; the colour
   // is sum_i a q^i rgb_i and dL/drgb_i = a q^i gcol. dalpha/dsdf, dalpha/dcos and dalpha/dinv_s are
   // ~ inv_s e^-30 ~ 1e-12: those gradients are 0.
+  // float rounds the guard (p + 1e-5 is 1.0000100136 in float): the GPU's a is 0.14 % above the
+  // double one, so the shares allow 0.3 %.
   const double a = 1e-5 / (1 + 1e-5), q = 1 - a + 1e-7;
   for (std::uint64_t ray = 0; ray < r.rays(); ++ray) {
-    CHECK(res.outputs.opacity[ray] / (a * (1 - std::pow(q, 64)) / (1 - q)) == doctest::Approx(1.0).epsilon(1e-4));
+    CHECK(res.outputs.opacity[ray] / (a * (1 - std::pow(q, 64)) / (1 - q)) == doctest::Approx(1.0).epsilon(3e-3));
     for (int ch = 0; ch < 3; ++ch) {
       double colour = 0;
       for (int i = 0; i < 64; ++i) colour += a * std::pow(q, i) * r.rgb[(ray * 64 + i) * 3 + ch];
-      CHECK(res.outputs.colour[ray * 3 + ch] / colour == doctest::Approx(1.0).epsilon(1e-4));
+      CHECK(res.outputs.colour[ray * 3 + ch] / colour == doctest::Approx(1.0).epsilon(3e-3));
     }
   }
   for (std::size_t k = 0; k < r.sdf.size(); ++k) {
     for (int ch = 0; ch < 3; ++ch)
-      CHECK(res.grads.rgb[k * 3 + ch] / (a * std::pow(q, k % 64) * 0.7f) == doctest::Approx(1.0).epsilon(1e-4));
+      CHECK(res.grads.rgb[k * 3 + ch] / (a * std::pow(q, k % 64) * 0.7f) == doctest::Approx(1.0).epsilon(3e-3));
     CHECK(res.grads.sdf[k] == doctest::Approx(0.0).epsilon(1e-9));
     CHECK(res.grads.cos[k] == doctest::Approx(0.0).epsilon(1e-9));
   }
@@ -136,7 +139,7 @@ TEST_CASE("ray starting inside: all sdf < 0") {
   const auto res = run(r);
   require_finite_result(res);
   // sdf +- |h| <= -0.47 and inv_s = 64: p, c <= e^-30 << 1e-5, so the first sample has
-  // alpha = 1 - c / (p + 1e-5) = 1 (float; 1 - 1e-8 in double) and leaves T = 1e-7 behind it:
+  // alpha = 1 - c / (p + 1e-5) = 1 (float; 1 - 1e-9 in double) and leaves T = 1e-7 behind it:
   // opacity 1 (+1e-7), colour = rgb of the first sample, dL/drgb = gcol there and ~1e-7 after.
   // dalpha/dsdf ~ inv_s c / 1e-5 is 1e-7 at most (4e-14 for these rays), and less for cos and inv_s:
   // those gradients are 0.
@@ -167,17 +170,18 @@ TEST_CASE("extreme inv_s: 1e6 and 1e-6") {
       require_finite_result(res);
       // The reference: at 1e6 every sigmoid saturates and all gradients are 0 in both; at 1e-6 the
       // flat sigmoid leaves dalpha/dsdf ~ 1e-11, which float gets only to ~1% (p - c is below its
-      // resolution), hence the 1e-6 floor.
+      // resolution), hence atol = 1e-6.
       check_reference(r, res, anneal, 1e-5, 1e-4, 1e-6);
       // 1e6: a step. Before the surface alpha is the guard's 1e-5 / (1 + 1e-5), at the first sample
       // inside p = 0 and alpha = 1, so opacity = 1 (+ 1e-7 per sample before). 1e-6: p ~ c ~ 1/2 for
-      // every sample, alpha = 1e-5 / (1/2 + 1e-5) (+ inv_s |h| ~ 1e-8), compounded as in the miss case.
+      // every sample, alpha = 1e-5 / (1/2 + 1e-5) (+ inv_s |h| ~ 1e-8), compounded as in the miss case;
+      // float resolves p - c only to ~1e-7, i.e. ~1% of that alpha.
       const double a = 1e-5 / (0.5 + 1e-5), q = 1 - a + 1e-7, flat = a * (1 - std::pow(q, 64)) / (1 - q);
       for (float o : res.outputs.opacity) {
         if (inv_s > 1.f) {
           CHECK(o == doctest::Approx(1.0).epsilon(1e-5));
         } else {
-          CHECK(o / flat == doctest::Approx(1.0).epsilon(2e-3));
+          CHECK(o / flat == doctest::Approx(1.0).epsilon(1e-2));
         }
       }
     }

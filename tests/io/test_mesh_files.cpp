@@ -374,3 +374,49 @@ TEST_CASE("malformed glTF / GLB files name the file and the field") {
   fails(a, "buffers[0].uri");
   fs::remove(path);
 }
+
+TEST_CASE("glTF through tinygltf: images are never decoded, buffers match byteLength, nothing deep or foreign is followed") {
+  const fs::path glb_path = temp("lib.glb"), gltf = temp("lib.gltf"), bin = temp("lib.bin");
+  Asset a = triangle_asset();
+  // Images of every kind (an external file that does not exist, a data: URI, a bufferView) are skipped.
+  a.doc["images"] = {nf::json{{"uri", "no_such_texture.png"}}, nf::json{{"uri", "data:image/png;base64,AAAA"}},
+                     nf::json{{"bufferView", 2}, {"mimeType", "image/png"}}};
+  write_glb(glb_path, a);
+  CHECK(read_mesh(glb_path).triangle_count() == 1);
+  // A JSON chunk padded with NULs (some writers do) is read.
+  std::string text = triangle_asset().doc.dump();
+  text.resize((text.size() + 3) / 4 * 4 + 4, '\0');
+  std::string bytes = glb(text, a.bin);
+  spit(glb_path, bytes);
+  CHECK(read_mesh(glb_path).triangle_count() == 1);
+  // Extras nested beyond what tinygltf's recursive copy survives are refused, not a crash.
+  a = triangle_asset();
+  std::string deep = a.doc.dump();
+  deep.insert(deep.size() - 1, ",\"extras\":" + std::string(100000, '[') + std::string(100000, ']'));
+  spit(glb_path, glb(deep, a.bin));
+  CHECK_THROWS_WITH_AS(read_mesh(glb_path), doctest::Contains("levels deep"), InputError);
+  // An external .bin must hold exactly byteLength bytes; a missing one is named; http: is refused.
+  a = triangle_asset();
+  a.doc["buffers"][0]["uri"] = "nf_test_mesh_lib.bin";
+  spit(gltf, a.doc.dump());
+  spit(bin, a.bin);
+  CHECK(read_mesh(gltf).triangle_count() == 1);
+  spit(bin, a.bin + "xxxx");
+  CHECK_THROWS_WITH_AS(read_mesh(gltf), doctest::Contains("buffers[0].byteLength 84 differs from the size of"), InputError);
+  fs::remove(bin);
+  CHECK_THROWS_WITH_AS(read_mesh(gltf), doctest::Contains("nf_test_mesh_lib.bin is missing"), InputError);
+  a.doc["buffers"][0]["uri"] = "http://example.com/nf_test_mesh_lib.bin";
+  spit(gltf, a.doc.dump());
+  CHECK_THROWS_WITH_AS(read_mesh(gltf), doctest::Contains("nothing is downloaded"), InputError);
+  // Fields tinygltf would read silently as defaults are refused by name.
+  a = triangle_asset();
+  a.doc["meshes"][0]["primitives"][0]["indices"] = "2";
+  write_glb(glb_path, a);
+  CHECK_THROWS_WITH_AS(read_mesh(glb_path), doctest::Contains("meshes[0].primitives[0].indices is \"2\""), InputError);
+  a = triangle_asset();
+  a.doc["bufferViews"][1]["byteOffset"] = 36.5;
+  write_glb(glb_path, a);
+  CHECK_THROWS_WITH_AS(read_mesh(glb_path), doctest::Contains("bufferViews[1].byteOffset is 36.5"), InputError);
+  fs::remove(glb_path);
+  fs::remove(gltf);
+}

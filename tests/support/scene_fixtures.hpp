@@ -16,12 +16,6 @@
 
 namespace nf::test {
 
-inline void write_png_header(const std::filesystem::path& p, std::uint32_t w, std::uint32_t h) {
-  unsigned char b[24] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0, 0, 13, 'I', 'H', 'D', 'R'};
-  for (int i = 0; i < 4; ++i) b[16 + i] = std::uint8_t(w >> (24 - 8 * i)), b[20 + i] = std::uint8_t(h >> (24 - 8 * i));
-  std::ofstream(p, std::ios::binary).write(reinterpret_cast<char*>(b), 24);
-}
-
 inline void write_jpeg_header(const std::filesystem::path& p, std::uint32_t w, std::uint32_t h) {
   const unsigned char b[] = {0xff, 0xd8, 0xff, 0xc0, 0, 17, 8, std::uint8_t(h >> 8), std::uint8_t(h), std::uint8_t(w >> 8),
                              std::uint8_t(w), 3, 1, 0x22, 0, 2, 0x11, 1, 3, 0x11, 1};
