@@ -4,6 +4,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "engine/bench/body_suite.hpp"
 #include "engine/bench/core_suite.hpp"
 #include "engine/bench/neus_suite.hpp"
 #include "engine/bench/nn_suite.hpp"
@@ -13,13 +14,14 @@
 
 namespace nf::bench {
 
-std::vector<std::string> suite_names() { return {"core", "nn", "splat", "neus"}; }
+std::vector<std::string> suite_names() { return {"core", "nn", "splat", "neus", "body"}; }
 
 json run_suite(gpu::Context& context, const Options& options) {
   if (options.suite == "core") return run_core_suite(context, options);
   if (options.suite == "nn") return run_nn_suite(context, options);
   if (options.suite == "splat") return run_splat_suite(context, options);
   if (options.suite == "neus") return run_neus_suite(context, options);
+  if (options.suite == "body") return run_body_suite(context, options);
   throw UsageError("unknown bench suite '" + options.suite + "'");
 }
 

@@ -75,6 +75,8 @@ NpyArray parse_npy_checked(const std::vector<char>& b, const std::string& where)
     else if (kind == 'f' && size == 4) { float v; std::memcpy(&v, p, 4); a.values[i] = v; }
     else if (kind == 'i' && size == 8) { std::int64_t v; std::memcpy(&v, p, 8); a.values[i] = double(v); }
     else if (kind == 'i' && size == 4) { std::int32_t v; std::memcpy(&v, p, 4); a.values[i] = v; }
+    else if (kind == 'u' && size == 8) { std::uint64_t v; std::memcpy(&v, p, 8); a.values[i] = double(v); }
+    else if (kind == 'u' && size == 4) { std::uint32_t v; std::memcpy(&v, p, 4); a.values[i] = v; }
     else throw InputError(where + ": unsupported dtype '" + descr + "'");
   }
   return a;
@@ -104,6 +106,61 @@ std::vector<std::string> npz_array_names(const std::filesystem::path& file) {
     if (name.size() > 4 && name.substr(name.size() - 4) == ".npy") names.push_back(name.substr(0, name.size() - 4));
   }
   return names;
+}
+
+namespace {
+
+// One .npy file: the version-1 header padded so the data starts on a 64-byte boundary.
+std::string npy_bytes(const NpyWrite& a, const std::string& where) {
+  std::uint64_t count = 1;
+  std::string shape;
+  for (std::uint64_t d : a.shape) count *= d, shape += (shape.empty() ? "" : ", ") + std::to_string(d);
+  shape = "(" + shape + (a.shape.size() == 1 ? ",)" : ")");  // Python's tuple spelling: "(3,)", "(3, 4)"
+  if (count != a.values.size()) throw InternalError(where + ": shape and value count disagree");
+  std::string header = "{'descr': '" + a.dtype + "', 'fortran_order': False, 'shape': " + shape + ", }";
+  const std::size_t total = 10 + header.size() + 1;
+  header += std::string((64 - total % 64) % 64, ' ') + "\n";
+  std::string out("\x93NUMPY\x01\x00", 8);
+  out += char(header.size() & 0xff), out += char(header.size() >> 8);
+  out += header;
+  for (double v : a.values) {
+    char b[8];
+    std::size_t n = 0;
+    if (a.dtype == "<f8") std::memcpy(b, &v, n = 8);
+    else if (a.dtype == "<f4") { const float f = float(v); std::memcpy(b, &f, n = 4); }
+    else if (a.dtype == "<i8") { const std::int64_t i = std::int64_t(v); std::memcpy(b, &i, n = 8); }
+    else if (a.dtype == "<u4") { const std::uint32_t u = std::uint32_t(v); std::memcpy(b, &u, n = 4); }
+    else throw InternalError(where + ": unsupported dtype " + a.dtype);
+    out.append(b, n);
+  }
+  return out;
+}
+
+}  // namespace
+
+void write_npz(const std::filesystem::path& file, const std::vector<NpyWrite>& arrays) {
+  const std::filesystem::path temp = file.string() + ".partial";
+  std::filesystem::remove(temp);
+  int error = 0;
+  zip_t* z = zip_open(temp.c_str(), ZIP_CREATE | ZIP_EXCL, &error);
+  if (!z) throw InputError(file.string() + ": cannot create (libzip error " + std::to_string(error) + ")");
+  std::vector<std::string> buffers;  // libzip reads them at zip_close
+  buffers.reserve(arrays.size());
+  for (const NpyWrite& a : arrays) {
+    buffers.push_back(npy_bytes(a, file.string() + ": array '" + a.name + "'"));
+    zip_source_t* src = zip_source_buffer(z, buffers.back().data(), buffers.back().size(), 0);
+    if (!src || zip_file_add(z, (a.name + ".npy").c_str(), src, ZIP_FL_OVERWRITE) < 0) {
+      if (src) zip_source_free(src);
+      zip_discard(z);
+      throw InputError(file.string() + ": cannot add array '" + a.name + "'");
+    }
+  }
+  if (zip_close(z) != 0) {
+    zip_discard(z);
+    std::filesystem::remove(temp);
+    throw InputError(file.string() + ": cannot write the archive");
+  }
+  std::filesystem::rename(temp, file);
 }
 
 }  // namespace nf::io

@@ -1,5 +1,6 @@
 #pragma once
-// Arrays from NumPy .npz files (zip archives of .npy, stored or deflated; read with libzip).
+// Arrays from NumPy .npz files (zip archives of .npy, stored or deflated; read with libzip), and
+// writing them (fixtures in the same layout as a converted SMAL model).
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -15,5 +16,14 @@ struct NpyArray {
 // Throws InputError naming the file and the array when it is missing or not a numeric array.
 NpyArray read_npz_array(const std::filesystem::path& file, const std::string& name);
 std::vector<std::string> npz_array_names(const std::filesystem::path& file);
+
+// Writes arrays (C order, uncompressed) to a new .npz, atomically. dtype: <f8, <f4, <i8 or <u4.
+struct NpyWrite {
+  std::string name;
+  std::vector<std::uint64_t> shape;
+  std::string dtype = "<f8";
+  std::vector<double> values;
+};
+void write_npz(const std::filesystem::path& file, const std::vector<NpyWrite>& arrays);
 
 }  // namespace nf::io

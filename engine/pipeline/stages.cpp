@@ -5,6 +5,7 @@
 #include "engine/core/error.hpp"
 #include "engine/core/output_guard.hpp"
 #include "engine/core/text.hpp"
+#include "engine/pipeline/body_stage.hpp"
 #include "engine/pipeline/neus_stage.hpp"
 
 namespace nf::pipeline {
@@ -13,7 +14,8 @@ namespace fs = std::filesystem;
 std::vector<std::unique_ptr<Stage>> reconstruction_stages() {
   std::vector<std::unique_ptr<Stage>> stages;
   stages.push_back(std::make_unique<NeusStage>());
-  // Next, as they land: body, knowledge, defur, frames, fur, export.
+  stages.push_back(std::make_unique<BodyStage>());
+  // Next, as they land: knowledge, defur, frames, fur, export.
   return stages;
 }
 

@@ -147,4 +147,24 @@ PreviewResult render_previews(const PreviewOptions& o) {
   return result;
 }
 
+std::vector<fs::path> render_region_previews(const geometry::Mesh& mesh, const io::Scene& scene,
+                                            const std::vector<std::uint32_t>& views, const fs::path& out) {
+  geometry::Mesh body = mesh;
+  if (body.normals.empty()) geometry::compute_vertex_normals(body);
+  BodyLook look;
+  look.vertex_colors.assign(body.vertex_count(), linear(palette_color(std::int32_t(body::Region::body))));
+  for (std::size_t i = 0; i < body.regions.size(); ++i) look.vertex_colors[i] = linear(palette_color(body.regions[i]));
+  RenderOptions options;
+  options.samples_per_axis = 2;
+  const StrandRenderer renderer(body, look, io::StrandSet{}, StrandLook{}, options);
+  const std::vector<std::string> names = io::view_file_names(scene, views);
+  OutputFolder folder(out);
+  std::vector<fs::path> files;
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    files.push_back(folder.claim(names[i] + ".png"));
+    io::write_png(files.back(), renderer.render(scene.cameras[views[i]]).rgb);
+  }
+  return files;
+}
+
 }  // namespace nf::synth

@@ -25,6 +25,8 @@
 #include <glm/glm.hpp>
 
 #include "engine/body/regions.hpp"
+#include "engine/geometry/mesh.hpp"
+#include "engine/io/scene.hpp"
 
 namespace nf::synth {
 
@@ -52,5 +54,11 @@ const std::array<glm::vec3, body::kRegionCount>& region_palette();
 // Reads the inputs (InputError naming the file and field when one is missing or malformed),
 // renders the chosen views and writes them. UsageError for bad option values.
 PreviewResult render_previews(const PreviewOptions& options);
+
+// A mesh shaded in its regions' palette colours (no strands) from the given cameras, written as
+// `<out>/<camera name>.png`: how a stage shows its labels to people. Returns the files.
+std::vector<std::filesystem::path> render_region_previews(const geometry::Mesh& mesh, const io::Scene& scene,
+                                                          const std::vector<std::uint32_t>& views,
+                                                          const std::filesystem::path& out);
 
 }  // namespace nf::synth

@@ -322,6 +322,26 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   CHECK(outcome[0]["stage"] == "neus");
   CHECK(outcome[0]["ran"] == false);  // unchanged: skipped
 
+  // The body stage on the cached surface: its files, labels on M_NeuS, ground-truth figures.
+  const std::string body = " --set body.samples=2000 --set body.hypothesis_steps=8 --set body.global_steps=10"
+                           " --set body.pose_steps=20 --set body.offset_steps=10 --set body.preview_views=1";
+  const Result fitted = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + body + " --to body --json");
+  INFO(fitted.output);
+  REQUIRE(fitted.code == 0);
+  const nf::json stages = nf::json::parse(fitted.output.substr(fitted.output.find('[')));
+  CHECK(stages[0]["ran"] == false);  // neus: unchanged
+  CHECK(stages[1]["stage"] == "body");
+  for (const char* f : {"body/outer_regions.ply", "body/fitted.ply", "body/params.json", "body/eyes.json",
+                        "body/animal_frame.json", "body/metrics.json", "body/previews/000.png"})
+    CHECK_MESSAGE(fs::exists(work / f), f);
+  const nf::geometry::Mesh labelled = nf::io::read_mesh(work / "body" / "outer_regions.ply");
+  CHECK(labelled.regions.size() == labelled.vertex_count());
+  CHECK(stages[1]["summary"]["ground_truth"]["accuracy"].get<double>() > 0.5);
+  const Result again_body = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + body + " --from body --json");
+  REQUIRE(again_body.code == 0);
+  const nf::json rerun = nf::json::parse(again_body.output.substr(again_body.output.find('[')));
+  CHECK((rerun[0]["ran"] == false && rerun[1]["ran"] == true));  // --from body reruns body, not neus
+
   CHECK(run("reconstruct --scene " + scene.string() + " --out " + (scene / "work").string() + tiny).code == 2);
   CHECK(run("reconstruct --scene " + scene.string() + " --out " + work.string() + " --set nues.steps=3").code == 2);
   const Result bad = run("reconstruct --scene " + scene.string() + " --out " + work.string() + " --set neus.colour=3");

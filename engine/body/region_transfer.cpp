@@ -1,0 +1,67 @@
+#include "engine/body/region_transfer.hpp"
+
+#include <cmath>
+
+#include <glm/glm.hpp>
+
+#include "engine/core/error.hpp"
+#include "engine/core/parallel.hpp"
+#include "engine/geometry/point_index.hpp"
+
+namespace nf::body {
+
+std::vector<std::int32_t> nearest_regions(const geometry::Mesh& target, const geometry::Mesh& labelled) {
+  if (labelled.regions.size() != labelled.vertex_count() || labelled.vertex_count() == 0)
+    throw InputError("region transfer: the labelled mesh has no regions");
+  const geometry::PointIndex index(labelled.positions);
+  std::vector<std::int32_t> out(target.vertex_count());
+  parallel_for(out.size(), [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) out[i] = labelled.regions[index.nearest(&target.positions[3 * i]).first];
+  });
+  return out;
+}
+
+RegionAccuracy region_accuracy(const geometry::Mesh& mesh, const geometry::Mesh& reference) {
+  if (mesh.regions.size() != mesh.vertex_count()) throw InputError("region accuracy: the mesh has no regions");
+  const std::vector<std::int32_t> truth = nearest_regions(mesh, reference);
+  std::vector<double> vertex_area(mesh.vertex_count(), 0.0);
+  for (std::size_t f = 0; f < mesh.triangle_count(); ++f) {
+    const std::uint32_t* t = &mesh.triangles[3 * f];
+    const auto p = [&](int k) {
+      return glm::dvec3(mesh.positions[3 * t[k]], mesh.positions[3 * t[k] + 1], mesh.positions[3 * t[k] + 2]);
+    };
+    const double a = 0.5 * glm::length(glm::cross(p(1) - p(0), p(2) - p(0))) / 3.0;
+    for (int k = 0; k < 3; ++k) vertex_area[t[k]] += a;
+  }
+  const auto same_place = [](std::int32_t region) {
+    return region == region_id(Region::mane) ? region_id(Region::neck) : region;
+  };
+  RegionAccuracy r;
+  std::array<double, kRegionCount> correct{};
+  double total = 0, right = 0;
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    const std::int32_t t = same_place(truth[i]);
+    if (t < 0 || t >= kRegionCount) continue;
+    total += vertex_area[i];
+    r.area[std::size_t(t)] += vertex_area[i];
+    if (same_place(mesh.regions[i]) == t) right += vertex_area[i], correct[std::size_t(t)] += vertex_area[i];
+  }
+  r.accuracy = total > 0 ? right / total : 0;
+  for (int k = 0; k < kRegionCount; ++k) {
+    r.recall[std::size_t(k)] = r.area[std::size_t(k)] > 0 ? correct[std::size_t(k)] / r.area[std::size_t(k)] : -1;
+    r.area[std::size_t(k)] = total > 0 ? r.area[std::size_t(k)] / total : 0;
+  }
+  return r;
+}
+
+json to_json(const RegionAccuracy& a) {
+  json recall = json::object(), area = json::object();
+  for (int k = 0; k < kRegionCount; ++k) {
+    if (a.recall[std::size_t(k)] < 0) continue;
+    recall[std::string(kRegionNames[std::size_t(k)])] = a.recall[std::size_t(k)];
+    area[std::string(kRegionNames[std::size_t(k)])] = a.area[std::size_t(k)];
+  }
+  return {{"accuracy", a.accuracy}, {"recall", recall}, {"area_share", area}};
+}
+
+}  // namespace nf::body

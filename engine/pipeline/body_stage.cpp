@@ -1,0 +1,235 @@
+#include "engine/pipeline/body_stage.hpp"
+
+#include <chrono>
+#include <cmath>
+
+#include "engine/body/posing.hpp"
+#include "engine/body/region_transfer.hpp"
+#include "engine/body/smal_model.hpp"
+#include "engine/core/atomic_file.hpp"
+#include "engine/core/error.hpp"
+#include "engine/core/interrupt.hpp"
+#include "engine/core/log.hpp"
+#include "engine/io/ground_truth.hpp"
+#include "engine/io/mesh.hpp"
+#include "engine/pipeline/neus_stage.hpp"
+#include "engine/synth/preview.hpp"
+
+namespace nf::pipeline {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr int kStageVersion = 1;
+
+BodySettings settings_of(const StageContext& c) {
+  return body_settings().resolve(c.quality, c.settings.value("body", json::object()));
+}
+
+json vec_json(const glm::dvec3& v) { return {v.x, v.y, v.z}; }
+json mat_json(const glm::dmat4& m) {  // rows, as people read a matrix
+  json rows = json::array();
+  for (int r = 0; r < 4; ++r) rows.push_back({m[0][r], m[1][r], m[2][r], m[3][r]});
+  return rows;
+}
+
+// The cameras' mean up vector when they agree on one (a capture rig's usual case).
+body::FrameHints frame_hints(const io::Scene& scene) {
+  glm::dvec3 sum(0.0);
+  for (const io::Camera& c : scene.cameras) sum += glm::normalize(glm::dvec3(c.camera_to_world[1]));
+  body::FrameHints hints;
+  if (!scene.cameras.empty() && glm::length(sum) > 0.5 * double(scene.cameras.size())) hints.up = glm::normalize(sum);
+  return hints;
+}
+
+// Two views for the previews: the first camera and the one looking most across it.
+std::vector<std::uint32_t> preview_views(const io::Scene& scene, int count) {
+  std::vector<std::uint32_t> views;
+  if (scene.cameras.empty() || count <= 0) return views;
+  views.push_back(0);
+  const glm::dvec3 first = glm::dvec3(scene.cameras[0].camera_to_world[2]);
+  while (int(views.size()) < count && views.size() < scene.cameras.size()) {
+    std::uint32_t best = 0;
+    double best_score = 2;
+    for (std::uint32_t k = 0; k < scene.cameras.size(); ++k) {
+      if (std::find(views.begin(), views.end(), k) != views.end()) continue;
+      const double score = std::abs(glm::dot(first, glm::normalize(glm::dvec3(scene.cameras[k].camera_to_world[2])))) +
+                           0.01 * double(views.size() > 1 ? k : 0);
+      if (score < best_score) best_score = score, best = k;
+    }
+    views.push_back(best);
+  }
+  return views;
+}
+
+json ground_truth_metrics(const StageContext& c, const geometry::Mesh& labelled, const body::FittedEyes& eyes) {
+  const std::optional<io::GroundTruth> gt = io::find_ground_truth(c.scene_dir);
+  if (!gt || !fs::exists(gt->bald())) return json();
+  const geometry::Mesh bald = io::read_mesh(gt->bald());
+  const body::RegionAccuracy accuracy = body::region_accuracy(labelled, bald);
+  json out = body::to_json(accuracy);
+  out["reference"] = "gt/bald.ply";
+  if (gt->info.contains("eye_centres")) {
+    const auto point = [](const json& j) { return glm::dvec3(j[0].get<double>(), j[1].get<double>(), j[2].get<double>()); };
+    const double mm = gt->cm_per_unit * 10.0;
+    out["eye_error_mm"] = {{"left", glm::distance(eyes.left, point(gt->info["eye_centres"]["left"])) * mm},
+                           {"right", glm::distance(eyes.right, point(gt->info["eye_centres"]["right"])) * mm}};
+  }
+  log::info("body: labels on M_NeuS agree with the ground truth on ", 100.0 * accuracy.accuracy, " % of the surface");
+  return out;
+}
+
+}  // namespace
+
+std::vector<fs::path> BodyStage::inputs(const StageContext& c) const {
+  std::vector<fs::path> files{neus_outputs(c.work).outer()};
+  const BodySettings s = settings_of(c);
+  if (!s.model.empty()) files.push_back(s.model);
+  if (const auto gt = io::find_ground_truth(c.scene_dir))  // synth scenes: metrics.json compares with them
+    for (const fs::path& f : {gt->bald(), gt->scene_json()})
+      if (fs::exists(f)) files.push_back(f);
+  return files;
+}
+
+json BodyStage::parameters(const StageContext& c) const {
+  json cams = json::array();
+  for (const io::Camera& cam : c.scene.cameras) cams.push_back(vec_json(glm::dvec3(cam.camera_to_world[1])));
+  return {{"stage_version", kStageVersion}, {"settings", body_settings().values(c.quality, c.settings.value("body", json::object()))},
+          {"camera_ups", cams}};
+}
+
+json BodyStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) {
+  const BodySettings s = settings_of(c);
+  const BodyOutputs out{out_dir};
+  const auto t0 = std::chrono::steady_clock::now();
+  const body::BodyModel model = s.model.empty() ? body::default_template() : body::load_smal_model(s.model);
+  const double model_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const fs::path target_file = neus_outputs(c.work).outer();
+  geometry::Mesh target = io::read_mesh(target_file);
+  log::info("body: fitting ", model.name, " (", model.vertex_count(), " vertices, ", model.joint_count(), " joints, ",
+            model.shape_count(), " shapes) to ", target_file.string(), " (", target.vertex_count(), " vertices)");
+  const body::FrameHints hints = frame_hints(c.scene);
+  if (!hints.up) log::info("body: the cameras do not agree on an up direction; trying every principal axis");
+  const body::BodyFit fit = body::fit_body(model, target, hints, s.fit, target_file.string());
+  if (interrupted()) throw Interrupted("body: stopped during the fit; it has no checkpoint (it takes seconds)");
+  for (const body::FitStageReport& r : fit.stages)
+    log::info("body: stage ", r.name, ": chamfer ", r.chamfer_start, " -> ", r.chamfer_end, " scene units in ", r.seconds, " s");
+
+  target.regions = body::nearest_regions(target, fit.fitted);
+  io::write_mesh_ply(out.outer_regions(), target);
+  io::write_mesh_ply(out.fitted(), fit.fitted);
+
+  const body::FittedEyes eyes = body::fitted_eyes(model, fit);
+  write_file_atomic(out.eyes(), json{{"left", vec_json(eyes.left)},
+                                     {"right", vec_json(eyes.right)},
+                                     {"distance", glm::distance(eyes.left, eyes.right)},
+                                     {"unit", "scene units"}}
+                                    .dump(2) + "\n");
+  const glm::dmat4& a = fit.animal_to_world;
+  const double scale = glm::length(glm::dvec3(a[0]));
+  write_file_atomic(out.animal_frame(), json{{"animal_to_world", mat_json(a)},
+                                             {"origin", vec_json(glm::dvec3(a[3]))},
+                                             {"left", vec_json(glm::dvec3(a[0]) / scale)},
+                                             {"up", vec_json(glm::dvec3(a[1]) / scale)},
+                                             {"forward", vec_json(glm::dvec3(a[2]) / scale)},
+                                             {"scene_units_per_model_unit", scale},
+                                             {"axes", "x: the animal's right to left, y: up (against gravity), "
+                                                      "z: tail to head"}}
+                                            .dump(2) + "\n");
+
+  const body::PoseLayout layout = body::PoseLayout::of(model, true);
+  json shape = json::object(), pose = json::object();
+  for (std::size_t k = 0; k < model.shape_count(); ++k) shape[model.shape_names[k]] = fit.variables[layout.shape_begin() + k];
+  for (std::size_t k = 0; k < model.joint_count(); ++k) {
+    const std::size_t i = layout.joint_begin() + 3 * k;
+    pose[model.joint_names[k]] = {fit.variables[i], fit.variables[i + 1], fit.variables[i + 2]};
+  }
+  json stages = json::array();
+  for (const body::FitStageReport& r : fit.stages)
+    stages.push_back({{"stage", r.name}, {"steps", r.steps}, {"chamfer_start", r.chamfer_start},
+                      {"chamfer_end", r.chamfer_end}, {"loss_end", r.loss_end}, {"seconds", r.seconds}});
+  double offset_rms = 0;
+  for (std::size_t i = layout.offset_begin(); i < layout.size(); ++i) offset_rms += fit.variables[i] * fit.variables[i];
+  offset_rms = std::sqrt(offset_rms / double(std::max<std::size_t>(1, model.vertex_count())));
+  write_file_atomic(out.params(), json{{"model", model.name},
+                                       {"shape", shape},
+                                       {"joint_rotations", pose},
+                                       {"animal_to_world", mat_json(a)},
+                                       {"offsets_rms_model_units", offset_rms},
+                                       {"stages", stages},
+                                       {"hypotheses", fit.hypotheses},
+                                       {"chamfer_mean", fit.chamfer_mean},
+                                       {"relative_chamfer", fit.relative_chamfer},
+                                       {"low_confidence", fit.low_confidence}}
+                                      .dump(2) + "\n");
+  if (fit.low_confidence)
+    log::warn("body: low confidence: the fitted body stays ", 100.0 * fit.relative_chamfer, " % of the surface's radius "
+              "from it on average (good quadruped fits stay below 5 %); is the subject a four-legged animal? Region labels "
+              "are likely wrong on much of the surface");
+
+  const auto t1 = std::chrono::steady_clock::now();
+  const std::vector<fs::path> previews =
+      synth::render_region_previews(target, c.scene, preview_views(c.scene, s.preview_views), out.previews());
+  const double preview_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+
+  json summary{{"model", {{"name", model.name}, {"vertices", model.vertex_count()}, {"joints", model.joint_count()},
+                          {"seconds", model_seconds}}},
+               {"stages", stages},
+               {"chamfer_mean", fit.chamfer_mean},
+               {"relative_chamfer", fit.relative_chamfer},
+               {"low_confidence", fit.low_confidence},
+               {"eye_distance", glm::distance(eyes.left, eyes.right)},
+               {"previews", previews.size()},
+               {"preview_seconds", preview_seconds},
+               {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()}};
+  const json gt = ground_truth_metrics(c, target, eyes);
+  if (!gt.is_null()) summary["ground_truth"] = gt;
+  write_file_atomic(out.metrics(), summary.dump(2) + "\n");
+  return summary;
+}
+
+const SettingsSchema<BodySettings>& body_settings() {
+  using B = BodySettings;
+  static const SettingsSchema<B> schema = [] {
+    SettingsSchema<B> s("body", [](const std::string& quality) {
+      B b;
+      if (quality == "draft") {
+        b.fit.samples = 5000;
+        b.fit.hypothesis_steps = 25;
+        b.fit.global_steps = 60, b.fit.pose_steps = 150, b.fit.offset_steps = 60;
+      }
+      return b;
+    });
+    s.add("samples", [](B& b) -> auto& { return b.fit.samples; }, 100, 1e6, "points drawn on M_NeuS per step")
+        .add("hypothesis_steps", [](B& b) -> auto& { return b.fit.hypothesis_steps; }, 1, 1e5,
+             "stage-1 steps per initial placement tried")
+        .add("global_steps", [](B& b) -> auto& { return b.fit.global_steps; }, 0, 1e5, "stage 1: rotation, translation, scale")
+        .add("pose_steps", [](B& b) -> auto& { return b.fit.pose_steps; }, 0, 1e5, "stage 2: + shape and joint rotations")
+        .add("offset_steps", [](B& b) -> auto& { return b.fit.offset_steps; }, 0, 1e5, "stage 3: + per-vertex offsets")
+        .add("global_lr", [](B& b) -> auto& { return b.fit.global_lr; }, 1e-6, 1, "Adam rate of the placement")
+        .add("pose_lr", [](B& b) -> auto& { return b.fit.pose_lr; }, 1e-6, 1, "Adam rate of the joint rotations")
+        .add("shape_lr", [](B& b) -> auto& { return b.fit.shape_lr; }, 1e-6, 1, "Adam rate of the shape coefficients")
+        .add("offset_lr", [](B& b) -> auto& { return b.fit.offset_lr; }, 1e-7, 1, "Adam rate of the per-vertex offsets")
+        .add("chamfer_weight", [](B& b) -> auto& { return b.fit.weights.chamfer; }, 0, 1e6, "two-way chamfer")
+        .add("laplacian_weight", [](B& b) -> auto& { return b.fit.weights.laplacian; }, 0, 1e6,
+             "Laplacian smoothness of the offsets (paper 0.01)")
+        .add("edge_weight", [](B& b) -> auto& { return b.fit.weights.edge; }, 0, 1e6, "edge term of the offsets (paper 0.8)")
+        .add("normal_weight", [](B& b) -> auto& { return b.fit.weights.normal; }, 0, 1e6,
+             "normal consistency of the fitted surface (paper 0.02)")
+        .add("pose_prior_weight", [](B& b) -> auto& { return b.fit.weights.pose_prior; }, 0, 1e6,
+             "sum of squared joint angles")
+        .add("joint_limit_weight", [](B& b) -> auto& { return b.fit.weights.joint_limit; }, 0, 1e6,
+             "squared excess of a joint angle over max_joint_angle")
+        .add("shape_prior_weight", [](B& b) -> auto& { return b.fit.weights.shape_prior; }, 0, 1e6,
+             "sum of squared shape coefficients")
+        .add("max_joint_angle", [](B& b) -> auto& { return b.fit.max_joint_angle; }, 0.01, 3.2,
+             "joint limit in radians")
+        .add("seed", [](B& b) -> auto& { return b.fit.seed; }, 0, 4294967295.0, "sampling seed")
+        .add("preview_views", [](B& b) -> auto& { return b.preview_views; }, 0, 16, "region-coloured preview renders")
+        .text("model", [](B& b) -> auto& { return b.model; }, {},
+              "a SMAL-layout .npz (tools/smal_to_npz.py); empty: the built-in quadruped family");
+    return s;
+  }();
+  return schema;
+}
+
+}  // namespace nf::pipeline

@@ -1,0 +1,42 @@
+#pragma once
+// The body stage (`body`): the rigged quadruped fitted to M_NeuS in three stages (engine/body/
+// body_fit.hpp), its regions moved onto M_NeuS by nearest vertex, the eye centres and the animal
+// frame. Its files are BodyOutputs below; its settings are declared in body_settings()
+// (`nf_gpu reconstruct --help-stage body`).
+#include <string>
+
+#include "engine/body/body_fit.hpp"
+#include "engine/pipeline/stage.hpp"
+
+namespace nf::pipeline {
+
+struct BodyOutputs {
+  std::filesystem::path dir;
+  std::filesystem::path outer_regions() const { return dir / "outer_regions.ply"; }  // M_NeuS + `region` per vertex
+  std::filesystem::path fitted() const { return dir / "fitted.ply"; }                // the fitted body, world units
+  std::filesystem::path params() const { return dir / "params.json"; }               // shape, pose, placement, losses
+  std::filesystem::path eyes() const { return dir / "eyes.json"; }                   // eye centres, world
+  std::filesystem::path animal_frame() const { return dir / "animal_frame.json"; }   // animal frame -> world
+  std::filesystem::path metrics() const { return dir / "metrics.json"; }             // the stage summary
+  std::filesystem::path previews() const { return dir / "previews"; }               // region colours, 2 cameras
+};
+inline BodyOutputs body_outputs(const std::filesystem::path& work) { return {work / "body"}; }
+
+struct BodySettings {
+  body::BodyFitOptions fit;
+  std::string model;  // "" (the built-in quadruped family) or a SMAL-layout .npz
+  int preview_views = 2;
+};
+const SettingsSchema<BodySettings>& body_settings();
+
+class BodyStage : public Stage {
+ public:
+  std::string name() const override { return "body"; }
+  std::vector<std::string> depends_on() const override { return {"neus"}; }
+  const StageSettings& settings() const override { return body_settings(); }
+  std::vector<std::filesystem::path> inputs(const StageContext& context) const override;
+  json parameters(const StageContext& context) const override;
+  json run(StageContext& context, const std::filesystem::path& out, const std::filesystem::path& resume) override;
+};
+
+}  // namespace nf::pipeline

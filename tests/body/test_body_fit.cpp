@@ -1,0 +1,193 @@
+// The body fit (engine/body/body_fit.hpp): the posing adjoint against finite differences, labels
+// that do not depend on the scene's world frame (rotations about every axis, z-up, x0.01 and x100,
+// far away), and bad input (no faces, NaN, several blobs, a sphere).
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <random>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "engine/body/body_fit.hpp"
+#include "engine/body/posing.hpp"
+#include "engine/body/quadruped.hpp"
+#include "engine/body/region_transfer.hpp"
+#include "engine/core/error.hpp"
+#include "engine/geometry/mesh_tools.hpp"
+
+using namespace nf;
+using namespace nf::body;
+
+namespace {
+
+const BodyModel& coarse_cat() {
+  static const BodyModel model = [] {
+    QuadrupedBuildOptions o;
+    o.voxel = 0.01f;
+    return build_quadruped(animal_proportions("cat"), o);
+  }();
+  return model;
+}
+
+// A posed, reshaped animal and its labels: the ground truth the fit must recover.
+geometry::Mesh target_animal() {
+  const BodyModel model = build_quadruped(vary_proportions(animal_proportions("dog"), 3), {});
+  BodyParams params = random_pose(model, 5);
+  return pose_body(model, params);
+}
+
+geometry::Mesh transformed(const geometry::Mesh& m, const glm::dmat4& t) {
+  geometry::Mesh out = m;
+  for (std::size_t i = 0; i < m.vertex_count(); ++i) {
+    const glm::dvec3 p = glm::dvec3(t * glm::dvec4(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2], 1.0));
+    for (int c = 0; c < 3; ++c) out.positions[3 * i + std::size_t(c)] = float(p[c]);
+  }
+  geometry::compute_vertex_normals(out);
+  return out;
+}
+
+BodyFitOptions quick_fit() {
+  BodyFitOptions o;
+  o.samples = 4000;
+  o.hypothesis_steps = 25;
+  o.global_steps = 60, o.pose_steps = 120, o.offset_steps = 40;
+  return o;
+}
+
+geometry::Mesh sphere(glm::dvec3 centre, double radius) {
+  geometry::Mesh m;
+  const int rings = 24, segments = 48;
+  for (int r = 0; r <= rings; ++r)
+    for (int s = 0; s < segments; ++s) {
+      const double th = M_PI * r / rings, ph = 2 * M_PI * s / segments;
+      const glm::dvec3 p = centre + radius * glm::dvec3(std::sin(th) * std::cos(ph), std::cos(th), std::sin(th) * std::sin(ph));
+      m.positions.insert(m.positions.end(), {float(p.x), float(p.y), float(p.z)});
+    }
+  for (int r = 0; r < rings; ++r)
+    for (int s = 0; s < segments; ++s) {
+      const std::uint32_t a = std::uint32_t(r * segments + s), b = std::uint32_t(r * segments + (s + 1) % segments);
+      const std::uint32_t c = a + segments, d = b + segments;
+      m.triangles.insert(m.triangles.end(), {a, c, b, b, c, d});
+    }
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("posing adjoint: dL/dx of L = sum c . world against central differences (double)") {
+  const BodyModel& model = coarse_cat();
+  const PoseLayout layout = PoseLayout::of(model, true);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<double> x(layout.size());
+  for (double& v : x) v = 0.02 * u(rng);
+  for (std::size_t i = 0; i < 7; ++i) x[i] = 0.5 * u(rng);  // a real rotation, translation and scale
+  for (std::size_t k = 0; k < layout.joints; ++k)
+    for (int c = 0; c < 3; ++c) x[layout.joint_begin() + 3 * k + std::size_t(c)] = 0.3 * u(rng);
+  x[layout.joint_begin()] = 0, x[layout.joint_begin() + 1] = 0, x[layout.joint_begin() + 2] = 0;  // a zero angle too
+  std::vector<glm::dvec3> c(layout.vertices);
+  for (auto& v : c) v = {u(rng), u(rng), u(rng)};
+  const auto loss = [&](const std::vector<double>& at) {
+    const PoseTrace t = pose_forward(model, layout, at);
+    double l = 0;
+    for (std::size_t i = 0; i < layout.vertices; ++i) l += glm::dot(c[i], t.world[i]);
+    return l;
+  };
+  const PoseTrace t = pose_forward(model, layout, x);
+  std::vector<double> grad(layout.size(), 0.0);
+  pose_backward(model, layout, x, t, c, grad);
+  REQUIRE(std::isfinite(loss(x)));
+  // Every global, shape and joint variable, and a spread of offsets.
+  std::vector<std::size_t> checked;
+  for (std::size_t i = 0; i < layout.offset_begin(); ++i) checked.push_back(i);
+  for (std::size_t i = layout.offset_begin(); i < layout.size(); i += 997) checked.push_back(i);
+  double worst = 0;
+  for (std::size_t i : checked) {
+    const double h = 1e-5;
+    std::vector<double> plus = x, minus = x;
+    plus[i] += h, minus[i] -= h;
+    const double fd = (loss(plus) - loss(minus)) / (2 * h);
+    const double err = std::abs(fd - grad[i]) / std::max(1.0, std::abs(fd));
+    worst = std::max(worst, err);
+    CHECK_MESSAGE(err < 1e-6, "variable " << i << ": adjoint " << grad[i] << ", finite differences " << fd);
+  }
+  MESSAGE("posing adjoint: worst relative error " << worst << " over " << checked.size() << " variables");
+}
+
+TEST_CASE("Rodrigues: orthonormal at every angle, the identity at zero") {
+  for (const glm::dvec3 w : {glm::dvec3(0.0), glm::dvec3(1e-9, 0, 0), glm::dvec3(0.3, -0.2, 0.9), glm::dvec3(0, M_PI, 0)}) {
+    const glm::dmat3 r = rodrigues(w);
+    const glm::dmat3 should_be_identity = glm::transpose(r) * r;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) CHECK(should_be_identity[a][b] == doctest::Approx(a == b ? 1.0 : 0.0).epsilon(1e-12));
+    CHECK(glm::determinant(r) == doctest::Approx(1.0).epsilon(1e-12));
+  }
+  const glm::dvec3 turned = rodrigues(glm::dvec3(0, 0, M_PI / 2)) * glm::dvec3(1, 0, 0);
+  CHECK(turned.x == doctest::Approx(0.0).epsilon(1e-12));
+  CHECK(turned.y == doctest::Approx(1.0).epsilon(1e-12));
+}
+
+TEST_CASE("the fit finds the same labels in every world frame: rotated about each axis, z-up, x0.01, x100, far away") {
+  const BodyModel model = default_template();
+  const geometry::Mesh animal = target_animal();  // y-up metres, as the family is built
+  const glm::dmat4 I(1.0);
+  struct Frame {
+    const char* name;
+    glm::dmat4 to_world;
+    bool camera_up;  // give the fit the cameras' up, as a scene would
+  };
+  const std::vector<Frame> frames = {
+      {"as built", I, true},
+      {"z-up, x100, turned 130 degrees", glm::scale(I, glm::dvec3(100.0)) * glm::rotate(I, 2.27, glm::dvec3(0, 0, 1)) *
+                                              glm::rotate(I, M_PI / 2, glm::dvec3(1, 0, 0)), true},
+      {"rotated about x, y and z, far away", glm::translate(I, glm::dvec3(1e4, -3e4, 2e4)) * glm::rotate(I, 0.7, glm::dvec3(1, 0, 0)) *
+                                                  glm::rotate(I, -2.1, glm::dvec3(0, 1, 0)) * glm::rotate(I, 1.2, glm::dvec3(0, 0, 1)), true},
+      {"x0.01, upside down, no camera up", glm::scale(I, glm::dvec3(0.01)) * glm::rotate(I, M_PI, glm::dvec3(0, 0, 1)), false},
+  };
+  std::vector<std::vector<std::int32_t>> labels;
+  for (const Frame& f : frames) {
+    INFO(std::string(f.name));
+    const geometry::Mesh target = transformed(animal, f.to_world);
+    FrameHints hints;
+    if (f.camera_up) hints.up = glm::normalize(glm::dvec3(f.to_world * glm::dvec4(0, 1, 0, 0)));
+    const BodyFit fit = fit_body(model, target, hints, quick_fit(), f.name);
+    geometry::Mesh labelled = target;
+    labelled.regions = nearest_regions(target, fit.fitted);
+    const RegionAccuracy a = region_accuracy(labelled, target);
+    MESSAGE(std::string(f.name) << ": label accuracy " << 100 * a.accuracy << " %, relative chamfer " << fit.relative_chamfer
+                                << ", recall " << to_json(a)["recall"].dump());
+    CHECK(a.accuracy > 0.87);
+    CHECK_FALSE(fit.low_confidence);
+    // The animal frame it found: forward is the target's head direction.
+    const glm::dvec3 forward = glm::normalize(glm::dvec3(fit.animal_to_world[2]));
+    const glm::dvec3 truth = glm::normalize(glm::dvec3(f.to_world * glm::dvec4(0, 0, 1, 0)));
+    CHECK(glm::dot(forward, truth) > 0.8);
+    labels.push_back(labelled.regions);
+  }
+  for (std::size_t k = 1; k < labels.size(); ++k) {
+    std::size_t same = 0;
+    for (std::size_t i = 0; i < labels[0].size(); ++i) same += labels[k][i] == labels[0][i];
+    CHECK(double(same) / double(labels[0].size()) > 0.85);
+  }
+}
+
+TEST_CASE("bad input: no faces, NaN, several blobs are refused by name; a sphere completes with low confidence") {
+  const BodyModel& model = coarse_cat();
+  BodyFitOptions o = quick_fit();
+  o.pose_steps = 20, o.offset_steps = 5, o.global_steps = 10, o.hypothesis_steps = 5;
+  geometry::Mesh points;
+  points.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  CHECK_THROWS_WITH_AS(fit_body(model, points, {}, o, "cloud.ply"), doctest::Contains("cloud.ply: the mesh has no faces"), InputError);
+  geometry::Mesh nan = sphere({0, 0, 0}, 1);
+  nan.positions[7] = std::nanf("");
+  CHECK_THROWS_WITH_AS(fit_body(model, nan, {}, o, "nan.ply"), doctest::Contains("nan.ply"), InputError);
+  geometry::Mesh blobs = sphere({0, 0, 0}, 1);
+  const geometry::Mesh other = sphere({5, 0, 0}, 1);
+  const std::uint32_t base = std::uint32_t(blobs.vertex_count());
+  blobs.positions.insert(blobs.positions.end(), other.positions.begin(), other.positions.end());
+  for (std::uint32_t v : other.triangles) blobs.triangles.push_back(base + v);
+  CHECK_THROWS_WITH_AS(fit_body(model, blobs, {}, o, "blobs.ply"), doctest::Contains("2 parts"), InputError);
+  const BodyFit ball = fit_body(model, sphere({3, 4, 5}, 0.2), FrameHints{glm::dvec3(0, 1, 0)}, o, "ball.ply");
+  CHECK(ball.low_confidence);
+  CHECK(std::isfinite(ball.chamfer_mean));
+}
