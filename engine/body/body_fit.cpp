@@ -5,9 +5,8 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <map>
-#include <set>
 
+#include "engine/body/fit_regularisers.hpp"
 #include "engine/body/posing.hpp"
 #include "engine/body/quadruped.hpp"
 #include "engine/body/regions.hpp"
@@ -27,30 +26,6 @@ namespace {
 constexpr double kLowConfidence = 0.08;
 
 glm::dvec3 at(const std::vector<float>& v, std::size_t i) { return {v[3 * i], v[3 * i + 1], v[3 * i + 2]}; }
-
-// The regularisers' mesh structure: unique edges, vertex neighbours, pairs of faces sharing an edge.
-struct Topology {
-  std::vector<std::array<std::uint32_t, 2>> edges;
-  std::vector<std::vector<std::uint32_t>> neighbours;
-  std::vector<std::array<std::uint32_t, 2>> face_pairs;
-
-  explicit Topology(const BodyModel& m) {
-    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> first_face;
-    neighbours.resize(m.vertex_count());
-    for (std::uint32_t f = 0; f * 3 < m.triangles.size(); ++f)
-      for (int e = 0; e < 3; ++e) {
-        std::uint32_t a = m.triangles[3 * f + e], b = m.triangles[3 * f + (e + 1) % 3];
-        if (a > b) std::swap(a, b);
-        const auto [it, fresh] = first_face.emplace(std::make_pair(a, b), f);
-        if (fresh) {
-          edges.push_back({a, b});
-          neighbours[a].push_back(b), neighbours[b].push_back(a);
-        } else {
-          face_pairs.push_back({it->second, f});
-        }
-      }
-  }
-};
 
 // Points drawn on the target in the fit frame.
 struct Target {
@@ -144,7 +119,7 @@ std::vector<glm::dvec3> principal_axes(const std::vector<float>& points, const g
 class Fitter {
  public:
   Fitter(const BodyModel& model, const Target& target, const BodyFitOptions& o)
-      : model_(model), target_(target), o_(o), layout_(PoseLayout::of(model, true)), topology_(model) {
+      : model_(model), target_(target), o_(o), layout_(PoseLayout::of(model, true)), topology_(model.triangles, model.vertex_count()) {
     // Ears fold: a beagle's hang 140 degrees from a cat's upright ones. Every other joint keeps the
     // common limit.
     for (const std::string& name : model.joint_names)
@@ -199,17 +174,28 @@ class Fitter {
     return r;
   }
 
-  // Mean distance from the given body vertices to the target (one way): how well one part sits.
-  double part_distance(const std::vector<double>& x, const std::vector<std::size_t>& vertices) const {
+  // Two-way chamfer of one part of the body: its vertices to the target, and the target points
+  // whose nearest body vertex lies in the part back to the part. Both ways matter: an ear that
+  // shrinks or tucks in sits close to the scan yet leaves the scan's ear uncovered.
+  double part_chamfer(const std::vector<double>& x, const std::vector<bool>& in_part) const {
     const PoseTrace t = pose_forward(model_, layout_, x);
-    const geometry::SurfaceSamples s = geometry::sample_surface(target_.mesh, std::max<std::uint32_t>(o_.samples, 20000), o_.seed);
-    const geometry::PointIndex index(s.points);
-    double sum = 0;
-    for (std::size_t i : vertices) {
-      const float p[3] = {float(t.world[i].x), float(t.world[i].y), float(t.world[i].z)};
-      sum += std::sqrt(double(index.nearest(p).second));
+    std::vector<float> body(3 * layout_.vertices), part;
+    std::vector<std::size_t> part_index;
+    for (std::size_t i = 0; i < layout_.vertices; ++i) {
+      for (int c = 0; c < 3; ++c) body[3 * i + std::size_t(c)] = float(t.world[i][c]);
+      if (in_part[i]) part.insert(part.end(), {body[3 * i], body[3 * i + 1], body[3 * i + 2]}), part_index.push_back(i);
     }
-    return vertices.empty() ? 0.0 : sum / double(vertices.size());
+    if (part_index.empty()) return 0.0;
+    const geometry::SurfaceSamples s = geometry::sample_surface(target_.mesh, std::max<std::uint32_t>(o_.samples, 20000), o_.seed);
+    const geometry::PointIndex samples(s.points), body_index(body), part_only(part);
+    double out = 0, back = 0;
+    for (std::size_t k = 0; k < part_index.size(); ++k) out += std::sqrt(double(samples.nearest(&part[3 * k]).second));
+    std::size_t covered = 0;
+    for (std::size_t k = 0; k < s.points.size() / 3; ++k) {
+      if (!in_part[body_index.nearest(&s.points[3 * k]).first]) continue;
+      back += std::sqrt(double(part_only.nearest(&s.points[3 * k]).second)), ++covered;
+    }
+    return out / double(part_index.size()) + (covered ? back / double(covered) : 0.0);
   }
 
   const PoseLayout& layout() const { return layout_; }
@@ -222,8 +208,10 @@ class Fitter {
       const std::size_t i = layout_.joint_begin() + 3 * k;
       const glm::dvec3 a(x[i], x[i + 1], x[i + 2]);
       const double angle = glm::length(a);
-      loss += w.pose_prior * angle * angle;
-      for (int c = 0; c < 3; ++c) grad[i + std::size_t(c)] += 2.0 * w.pose_prior * a[c];
+      if (limits_[k] <= o_.max_joint_angle) {  // not on the ears: a hanging ear is no unusual pose
+        loss += w.pose_prior * angle * angle;
+        for (int c = 0; c < 3; ++c) grad[i + std::size_t(c)] += 2.0 * w.pose_prior * a[c];
+      }
       if (angle > limits_[k]) {
         const double excess = angle - limits_[k];
         loss += w.joint_limit * excess * excess;
@@ -238,67 +226,17 @@ class Fitter {
     return loss;
   }
 
-  // Laplacian and edge terms on the offsets (scaled to fit units by the current scale, which they
-  // treat as a constant), normal consistency on the posed surface (gradient into d_world).
+  // Laplacian and edge terms on the offsets scaled to fit units by the current scale (held constant
+  // in these terms), normal consistency on the posed surface (gradient into d_world).
   double offset_regularisers(const std::vector<double>& x, const PoseTrace& t, std::vector<double>& grad,
                              std::vector<glm::dvec3>& d_world) const {
-    const BodyFitWeights& w = o_.weights;
     const std::size_t V = layout_.vertices, base = layout_.offset_begin();
-    const double s2 = t.scale * t.scale;
-    const auto off = [&](std::size_t i) { return glm::dvec3(x[base + 3 * i], x[base + 3 * i + 1], x[base + 3 * i + 2]); };
-    const auto add = [&](std::size_t i, const glm::dvec3& g) {
-      for (int c = 0; c < 3; ++c) grad[base + 3 * i + std::size_t(c)] += g[c];
-    };
-    double loss = 0;
-    // Uniform Laplacian: u_i = off_i - mean of the neighbours' offsets.
-    std::vector<glm::dvec3> u(V, glm::dvec3(0.0));
-    for (std::size_t i = 0; i < V; ++i) {
-      const auto& nb = topology_.neighbours[i];
-      if (nb.empty()) continue;
-      glm::dvec3 mean(0.0);
-      for (std::uint32_t j : nb) mean += off(j);
-      u[i] = off(i) - mean / double(nb.size());
-      loss += w.laplacian * s2 * glm::dot(u[i], u[i]) / double(V);
-    }
-    for (std::size_t i = 0; i < V; ++i) {
-      const auto& nb = topology_.neighbours[i];
-      if (nb.empty()) continue;
-      const glm::dvec3 g = 2.0 * w.laplacian * s2 * u[i] / double(V);
-      add(i, g);
-      for (std::uint32_t j : nb) add(j, -g / double(nb.size()));
-    }
-    const double E = double(std::max<std::size_t>(1, topology_.edges.size()));
-    for (const auto& e : topology_.edges) {
-      const glm::dvec3 d = off(e[0]) - off(e[1]);
-      loss += w.edge * s2 * glm::dot(d, d) / E;
-      add(e[0], 2.0 * w.edge * s2 * d / E), add(e[1], -2.0 * w.edge * s2 * d / E);
-    }
-    // Normal consistency: 1 - n_a . n_b over faces sharing an edge.
-    const std::size_t F = model_.triangles.size() / 3;
-    std::vector<glm::dvec3> cross(F), normal(F);
-    for (std::size_t f = 0; f < F; ++f) {
-      const glm::dvec3 a = t.world[model_.triangles[3 * f]], b = t.world[model_.triangles[3 * f + 1]],
-                       c = t.world[model_.triangles[3 * f + 2]];
-      cross[f] = glm::cross(b - a, c - a);
-      const double len = glm::length(cross[f]);
-      normal[f] = len > 1e-20 ? cross[f] / len : glm::dvec3(0.0);
-    }
-    std::vector<glm::dvec3> d_normal(F, glm::dvec3(0.0));
-    const double P = double(std::max<std::size_t>(1, topology_.face_pairs.size()));
-    for (const auto& p : topology_.face_pairs) {
-      loss += w.normal * (1.0 - glm::dot(normal[p[0]], normal[p[1]])) / P;
-      d_normal[p[0]] -= w.normal * normal[p[1]] / P;
-      d_normal[p[1]] -= w.normal * normal[p[0]] / P;
-    }
-    for (std::size_t f = 0; f < F; ++f) {
-      const double len = glm::length(cross[f]);
-      if (len <= 1e-20) continue;
-      const glm::dvec3 n = normal[f], g = (d_normal[f] - glm::dot(d_normal[f], n) * n) / len;  // d/d cross
-      const std::uint32_t ia = model_.triangles[3 * f], ib = model_.triangles[3 * f + 1], ic = model_.triangles[3 * f + 2];
-      const glm::dvec3 e1 = t.world[ib] - t.world[ia], e2 = t.world[ic] - t.world[ia];
-      const glm::dvec3 de1 = glm::cross(e2, g), de2 = glm::cross(g, e1);
-      d_world[ia] -= de1 + de2, d_world[ib] += de1, d_world[ic] += de2;
-    }
+    std::vector<glm::dvec3> d(V), d_grad(V, glm::dvec3(0.0));
+    for (std::size_t i = 0; i < V; ++i) d[i] = t.scale * glm::dvec3(x[base + 3 * i], x[base + 3 * i + 1], x[base + 3 * i + 2]);
+    double loss = displacement_smoothness(topology_, d, o_.weights.laplacian, o_.weights.edge, d_grad);
+    for (std::size_t i = 0; i < V; ++i)
+      for (int c = 0; c < 3; ++c) grad[base + 3 * i + std::size_t(c)] += t.scale * d_grad[i][c];
+    loss += normal_consistency(topology_, model_.triangles, t.world, o_.weights.normal, d_world);
     return loss;
   }
 
@@ -306,7 +244,7 @@ class Fitter {
   const Target& target_;
   const BodyFitOptions& o_;
   PoseLayout layout_;
-  Topology topology_;
+  MeshTopology topology_;
   std::vector<double> limits_;  // per joint, radians
 };
 
@@ -448,24 +386,24 @@ BodyFit fit_body(const BodyModel& model, const geometry::Mesh& world_target, con
     if (ear && !parent_ear) ears.push_back({k, model.joint_template[3 * k] >= 0 ? 1.0 : -1.0});
   }
   if (!ears.empty()) {
-    // Judged by how far the ear vertices (skinned mostly to an ear joint or below it) lie from the
-    // scan: the whole body's chamfer barely notices a pair of ears.
-    std::vector<bool> in_ear(model.joint_count(), false);
-    for (const auto& e : ears) in_ear[e.first] = true;
+    // Judged by the two-way chamfer of the head and ears (vertices skinned to the head joint or
+    // below it): the whole body's chamfer barely notices a pair of ears.
+    const int head = model.parents[ears.front().first];
+    std::vector<bool> in_head(model.joint_count(), false);
+    if (head >= 0) in_head[std::size_t(head)] = true;
     for (std::size_t k = 0; k < model.joint_count(); ++k)
-      if (model.parents[k] >= 0 && in_ear[std::size_t(model.parents[k])]) in_ear[k] = true;
-    std::vector<std::size_t> ear_vertices;
-    for (std::size_t i = 0; i < model.vertex_count(); ++i)
-      if (in_ear[model.skin_joints[i * kSkinInfluences]]) ear_vertices.push_back(i);
+      if (model.parents[k] >= 0 && in_head[std::size_t(model.parents[k])]) in_head[k] = true;
+    std::vector<bool> head_vertices(model.vertex_count());
+    for (std::size_t i = 0; i < model.vertex_count(); ++i) head_vertices[i] = in_head[model.skin_joints[i * kSkinInfluences]];
     std::vector<double> best_ears;
-    double best_ears_distance = std::numeric_limits<double>::infinity();
+    double best_ears_chamfer = std::numeric_limits<double>::infinity();
     for (const double droop : {0.0, 1.2, 2.4}) {
       std::vector<double> x = best;
       for (const auto& [k, side] : ears) x[L.joint_begin() + 3 * k + 2] = -side * droop;  // out and down about z
       run_stage(fitter, x, "ears", o.hypothesis_steps, kGlobal | kShapePose, o, step);
-      const double d = fitter.part_distance(x, ear_vertices);
-      hypotheses.push_back({{"ear_droop", droop}, {"ear_distance", d * target.radius}});
-      if (d < best_ears_distance) best_ears_distance = d, best_ears = x;
+      const double d = fitter.part_chamfer(x, head_vertices);
+      hypotheses.push_back({{"ear_droop", droop}, {"head_chamfer", d * target.radius}});
+      if (d < best_ears_chamfer) best_ears_chamfer = d, best_ears = x;
     }
     best = best_ears;
   }

@@ -5,8 +5,8 @@
 //   shaped joints    J(beta) = joint_template + sum_s beta_s * joint_shape_dirs[s]
 //   posed vertices   linear blend skinning with per-joint local rotations (axis-angle, rest frames
 //                    aligned with the animal frame), then a similarity to the world.
-// Coordinates are in the animal frame (as the paper's growth-direction prompt defines it): +x towards the animal's left, +y up, +z from
-// tail to head.
+// Coordinates are in the animal frame (as the paper's growth-direction prompt defines it): +x
+// towards the animal's left, +y up, +z from tail to head.
 #include <cstdint>
 #include <string>
 #include <vector>

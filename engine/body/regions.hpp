@@ -1,6 +1,7 @@
 #pragma once
-// Body regions of the method (the paper's list, plus mane): the labels that carry fur length, thickness and growth
-// direction. Region ids are indices into kRegionNames and are what meshes store per vertex.
+// Body regions of the method (the paper's list, plus mane): the labels that carry fur length,
+// thickness and growth direction. Region ids are indices into kRegionNames and are what meshes
+// store per vertex.
 #include <array>
 #include <cstdint>
 #include <optional>

@@ -9,6 +9,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "engine/body/body_fit.hpp"
+#include "engine/body/fit_regularisers.hpp"
 #include "engine/body/posing.hpp"
 #include "engine/body/quadruped.hpp"
 #include "engine/body/region_transfer.hpp"
@@ -114,6 +115,50 @@ TEST_CASE("posing adjoint: dL/dx of L = sum c . world against central difference
   MESSAGE("posing adjoint: worst relative error " << worst << " over " << checked.size() << " variables");
 }
 
+TEST_CASE("stage-3 regularisers: smoothness and normal-consistency gradients against central differences") {
+  const BodyModel& model = coarse_cat();
+  const MeshTopology topology(model.triangles, model.vertex_count());
+  REQUIRE(topology.face_pairs.size() == model.triangles.size() / 2);  // closed: every edge shared by two faces
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<glm::dvec3> d(model.vertex_count()), p(model.vertex_count());
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    d[i] = 0.01 * glm::dvec3(u(rng), u(rng), u(rng));
+    p[i] = glm::dvec3(model.template_vertices[3 * i], model.template_vertices[3 * i + 1], model.template_vertices[3 * i + 2]) +
+           0.002 * glm::dvec3(u(rng), u(rng), u(rng));
+  }
+  std::vector<glm::dvec3> gd(d.size(), glm::dvec3(0.0)), gp(p.size(), glm::dvec3(0.0));
+  const double smooth = displacement_smoothness(topology, d, 0.01, 0.8, gd);
+  const double normal = normal_consistency(topology, model.triangles, p, 0.02, gp);
+  CHECK(smooth > 0);
+  CHECK(normal > 0);
+  std::vector<glm::dvec3> scratch(d.size());
+  for (std::size_t i = 0; i < d.size(); i += 211)
+    for (int c = 0; c < 3; ++c) {
+      const double h = 1e-6;
+      auto plus = d, minus = d;
+      plus[i][c] += h, minus[i][c] -= h;
+      const double fd = (displacement_smoothness(topology, plus, 0.01, 0.8, scratch) -
+                         displacement_smoothness(topology, minus, 0.01, 0.8, scratch)) / (2 * h);
+      CHECK(gd[i][c] == doctest::Approx(fd).epsilon(1e-6).scale(1e-9));
+      // A sum over ~10^4 face pairs: its rounding (~1e-15) over 2h limits the differences to ~1e-9
+      // absolute, hence an absolute floor of 1e-8 beside the relative 1e-5.
+      const double hn = 1e-6;
+      auto pp = p, pm = p;
+      pp[i][c] += hn, pm[i][c] -= hn;
+      const double fn = (normal_consistency(topology, model.triangles, pp, 0.02, scratch) -
+                         normal_consistency(topology, model.triangles, pm, 0.02, scratch)) / (2 * hn);
+      CHECK(gp[i][c] == doctest::Approx(fn).epsilon(1e-5).scale(1e-3));
+    }
+  // A flat pair of faces is perfectly consistent; a rigid motion changes nothing.
+  const std::vector<std::uint32_t> quad{0, 1, 2, 0, 2, 3};
+  const MeshTopology flat(quad, 4);
+  std::vector<glm::dvec3> g4(4, glm::dvec3(0.0));
+  CHECK(normal_consistency(flat, quad, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, 1.0, g4) == doctest::Approx(0.0));
+  CHECK(displacement_smoothness(topology, std::vector<glm::dvec3>(d.size(), glm::dvec3(0.3, -0.1, 2.0)), 1.0, 1.0, scratch) ==
+        doctest::Approx(0.0));
+}
+
 TEST_CASE("Rodrigues: orthonormal at every angle, the identity at zero") {
   for (const glm::dvec3 w : {glm::dvec3(0.0), glm::dvec3(1e-9, 0, 0), glm::dvec3(0.3, -0.2, 0.9), glm::dvec3(0, M_PI, 0)}) {
     const glm::dmat3 r = rodrigues(w);
@@ -190,4 +235,27 @@ TEST_CASE("bad input: no faces, NaN, several blobs are refused by name; a sphere
   const BodyFit ball = fit_body(model, sphere({3, 4, 5}, 0.2), FrameHints{glm::dvec3(0, 1, 0)}, o, "ball.ply");
   CHECK(ball.low_confidence);
   CHECK(std::isfinite(ball.chamfer_mean));
+}
+
+TEST_CASE("refit to a thinner surface (as M_bald after defurring) starts from the first fit and gets closer") {
+  const BodyModel model = default_template();
+  const geometry::Mesh outer = target_animal();
+  const FrameHints hints{glm::dvec3(0, 1, 0)};
+  const BodyFit first = fit_body(model, outer, hints, quick_fit(), "outer");
+  // The bald body: every vertex 8 mm in along its normal.
+  geometry::Mesh bald = outer;
+  for (std::size_t i = 0; i < bald.vertex_count(); ++i)
+    for (int c = 0; c < 3; ++c) bald.positions[3 * i + std::size_t(c)] -= 0.008f * bald.normals[3 * i + std::size_t(c)];
+  geometry::compute_vertex_normals(bald);
+  const BodyFit refit = refit_body(model, bald, first, quick_fit(), "bald");
+  REQUIRE(refit.stages.size() == 2);
+  // Its first step already sits near the bald surface (it starts from the first fit, not from scratch)...
+  CHECK(refit.stages.front().chamfer_start < 3 * first.chamfer_mean);
+  // ...and it ends closer to the bald surface than the first fit is.
+  CHECK(refit.chamfer_mean < refit.stages.front().chamfer_start);
+  geometry::Mesh labelled = bald;
+  labelled.regions = nearest_regions(bald, refit.fitted);
+  CHECK(region_accuracy(labelled, bald).accuracy > 0.85);
+  CHECK(glm::length(glm::dvec3(refit.animal_to_world[2]) - glm::dvec3(first.animal_to_world[2])) <
+        0.1 * glm::length(glm::dvec3(first.animal_to_world[2])));  // the same frame
 }

@@ -10,7 +10,9 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "engine/body/body_fit.hpp"
 #include "engine/body/body_model.hpp"
+#include "engine/body/region_transfer.hpp"
 #include "engine/body/quadruped.hpp"
 #include "engine/body/regions.hpp"
 #include "engine/body/smal_model.hpp"
@@ -206,6 +208,23 @@ TEST_CASE("a SMAL-layout .npz loads into the animal frame with joints, weights a
   CHECK(eyes.left.x > 0);
   CHECK(eyes.right.x < 0);
   fs::remove(fx.file);
+}
+
+TEST_CASE("the body fit takes a SMAL-layout model as it takes the family's template") {
+  const Fixture fx = write_fixture();
+  const BodyModel smal = load_smal_model(fx.file);
+  fs::remove(fx.file);
+  const BodyModel animal = build_quadruped(vary_proportions(animal_proportions("dog"), 4), {});
+  const geometry::Mesh target = pose_body(animal, random_pose(animal, 2));
+  BodyFitOptions o;
+  o.samples = 4000, o.hypothesis_steps = 20, o.global_steps = 40, o.pose_steps = 80, o.offset_steps = 30;
+  const BodyFit fit = fit_body(smal, target, FrameHints{glm::dvec3(0, 1, 0)}, o, "dog");
+  geometry::Mesh labelled = target;
+  labelled.regions = nearest_regions(target, fit.fitted);
+  const double accuracy = region_accuracy(labelled, target).accuracy;
+  MESSAGE("SMAL-layout fixture fitted to a procedural dog: label accuracy " << 100 * accuracy << " %");
+  CHECK(accuracy > 0.85);
+  CHECK_FALSE(fit.low_confidence);
 }
 
 TEST_CASE("a SMAL file with a missing array or a wrong shape is refused by name") {

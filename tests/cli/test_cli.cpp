@@ -372,12 +372,15 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   CHECK(stage_help.output.find("mesh_resolution") != std::string::npos);
   CHECK(stage_help.output.find("[8, 2048]") != std::string::npos);
   CHECK(run("reconstruct --help-stage nues").code == 2);
-  // The README's table is the one the declarations make (regenerate it with --markdown).
-  const Result table = run("reconstruct --help-stage neus --markdown");
+  // The README's tables are the ones the declarations make (regenerate them with --markdown).
   std::ifstream readme(NF_README);
   const std::string manual(std::istreambuf_iterator<char>(readme), {});
-  CHECK_MESSAGE(manual.find(table.output) != std::string::npos,
-                "README.md's neus settings table is stale: paste `nf_gpu reconstruct --help-stage neus --markdown`");
+  for (const std::string stage : {"neus", "body"}) {
+    const Result table = run("reconstruct --help-stage " + stage + " --markdown");
+    CHECK_MESSAGE(manual.find("### `" + stage + "`\n\n" + table.output) != std::string::npos,
+                  "README.md's " << stage << " settings table is stale: paste `nf_gpu reconstruct --help-stage " << stage
+                                 << " --markdown`");
+  }
   fs::remove_all(root);
 }
 
