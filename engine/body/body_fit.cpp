@@ -71,12 +71,12 @@ Target normalise_target(const geometry::Mesh& world, const std::string& source) 
 glm::dvec3 axis_angle(const glm::dmat3& r) {
   const double c = std::clamp((r[0][0] + r[1][1] + r[2][2] - 1.0) / 2.0, -1.0, 1.0), angle = std::acos(c);
   if (angle < 1e-9) return glm::dvec3(0.0);
-  if (angle > M_PI - 1e-6) {  // near pi: the axis from the diagonal
-    glm::dvec3 axis(std::sqrt(std::max(0.0, (r[0][0] + 1) / 2)), std::sqrt(std::max(0.0, (r[1][1] + 1) / 2)),
-                    std::sqrt(std::max(0.0, (r[2][2] + 1) / 2)));
-    if (r[1][0] < 0) axis.y = -axis.y;
-    if (r[2][0] < 0) axis.z = -axis.z;
-    return angle * glm::normalize(axis);
+  if (angle > M_PI - 1e-6) {  // near pi: R + I = 2 a a^T; its largest column is the axis (up to sign)
+    const glm::dmat3 s = r + glm::dmat3(1.0);
+    int k = 0;
+    for (int col = 1; col < 3; ++col)
+      if (s[col][col] > s[k][k]) k = col;
+    return angle * glm::normalize(s[k]);
   }
   const glm::dvec3 axis(r[1][2] - r[2][1], r[2][0] - r[0][2], r[0][1] - r[1][0]);
   return angle * axis / (2.0 * std::sin(angle));
@@ -105,9 +105,14 @@ std::vector<glm::dvec3> principal_axes(const std::vector<float>& points, const g
       if (lambda < 1e-15) break;
       v = w / lambda;
     }
-    if (lambda < 1e-15) {  // degenerate: any unit vector orthogonal to the found ones
-      v = axes.empty() ? glm::dvec3(1, 0, 0) : glm::normalize(glm::cross(axes[0], std::abs(axes[0].x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
-      for (const glm::dvec3& a : axes) v -= glm::dot(v, a) * a;
+    if (lambda < 1e-15) {  // degenerate: a unit vector orthogonal to up and to the axes found
+      std::vector<glm::dvec3> taken = axes;
+      if (glm::length(up) > 0) taken.push_back(up);
+      for (const glm::dvec3 trial : {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)}) {
+        v = trial;
+        for (const glm::dvec3& a : taken) v -= glm::dot(v, a) * a;
+        if (glm::length(v) > 0.1) break;
+      }
       v = glm::normalize(v);
     }
     axes.push_back(v);
@@ -122,10 +127,11 @@ class Fitter {
       : model_(model), target_(target), o_(o), layout_(PoseLayout::of(model, true)), topology_(model.triangles, model.vertex_count()) {
     // Ears fold: a beagle's hang 140 degrees from a cat's upright ones. Every other joint keeps the
     // common limit.
-    for (const std::string& name : model.joint_names)
-      limits_.push_back(name.find("ear") != std::string::npos || name.find("Ear") != std::string::npos
-                            ? std::max(o.max_joint_angle, 2.8)
-                            : o.max_joint_angle);
+    for (const std::string& name : model.joint_names) {
+      const bool ear = name.find("ear") != std::string::npos || name.find("Ear") != std::string::npos;
+      ear_.push_back(ear);
+      limits_.push_back(ear ? std::max(o.max_joint_angle, 2.8) : o.max_joint_angle);
+    }
   }
 
   struct StepResult {
@@ -208,7 +214,7 @@ class Fitter {
       const std::size_t i = layout_.joint_begin() + 3 * k;
       const glm::dvec3 a(x[i], x[i + 1], x[i + 2]);
       const double angle = glm::length(a);
-      if (limits_[k] <= o_.max_joint_angle) {  // not on the ears: a hanging ear is no unusual pose
+      if (!ear_[k]) {  // not on the ears: a hanging ear is no unusual pose
         loss += w.pose_prior * angle * angle;
         for (int c = 0; c < 3; ++c) grad[i + std::size_t(c)] += 2.0 * w.pose_prior * a[c];
       }
@@ -246,6 +252,7 @@ class Fitter {
   PoseLayout layout_;
   MeshTopology topology_;
   std::vector<double> limits_;  // per joint, radians
+  std::vector<bool> ear_;       // per joint
 };
 
 enum Active : unsigned { kGlobal = 1, kShapePose = 2, kOffsets = 4 };
@@ -279,8 +286,9 @@ FitStageReport run_stage(const Fitter& fitter, std::vector<double>& x, const std
     const double decay = 1.0 - 0.9 * double(k) / double(std::max<std::uint32_t>(1, steps));
     nn::adam_step_ref(x, grad, state, config, groups, decay);
   }
-  if (steps > 0) {  // the chamfer after the last step
+  {  // the chamfer after the last step (or of the start, for a stage of 0 steps)
     const Fitter::StepResult r = fitter.evaluate(x, grad, step_counter++, priors, regularise);
+    if (steps == 0) report.chamfer_start = r.chamfer;
     report.chamfer_end = r.chamfer, report.loss_end = r.loss;
   }
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -373,6 +381,8 @@ BodyFit fit_body(const BodyModel& model, const geometry::Mesh& world_target, con
                           {"chamfer", r.chamfer_end * target.radius}});
     if (r.chamfer_end < best_chamfer) best_chamfer = r.chamfer_end, best = x;
   }
+  if (best.empty())
+    throw InputError(source + ": no initial placement of the body gave a finite fit (a degenerate surface?)");
   std::vector<FitStageReport> stages;
   stages.push_back(run_stage(fitter, best, "global", o.global_steps, kGlobal, o, step));
   // Ears hang or stand: gradient steps do not fold an upright ear down the side of the head, so
@@ -405,7 +415,7 @@ BodyFit fit_body(const BodyModel& model, const geometry::Mesh& world_target, con
       hypotheses.push_back({{"ear_droop", droop}, {"head_chamfer", d * target.radius}});
       if (d < best_ears_chamfer) best_ears_chamfer = d, best_ears = x;
     }
-    best = best_ears;
+    if (!best_ears.empty()) best = best_ears;
   }
   stages.push_back(run_stage(fitter, best, "shape_pose", o.pose_steps, kGlobal | kShapePose, o, step));
   stages.push_back(run_stage(fitter, best, "offsets", o.offset_steps, kGlobal | kShapePose | kOffsets, o, step));

@@ -86,7 +86,8 @@ struct FittedEyes {
 };
 FittedEyes fitted_eyes(const BodyModel& model, const BodyFit& fit);
 
-// The model's mean proportions over the family, the template the body stage fits by default.
+// The family's mean proportions (the ears' thickness and tip shape are the first animal's, the
+// cat's), the template the body stage fits by default.
 BodyModel default_template();
 
 }  // namespace nf::body

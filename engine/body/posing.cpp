@@ -96,7 +96,9 @@ PoseTrace pose_forward(const BodyModel& model, const PoseLayout& L, const std::v
 
 void pose_backward(const BodyModel& model, const PoseLayout& L, const std::vector<double>& x, const PoseTrace& t,
                    const std::vector<glm::dvec3>& d_world, std::vector<double>& grad) {
-  NF_CHECK(grad.size() == L.size() && d_world.size() == L.vertices, "pose adjoint: sizes do not match the layout");
+  NF_CHECK(grad.size() == L.size() && x.size() == L.size() && d_world.size() == L.vertices &&
+               t.world.size() == L.vertices && t.joints.size() == L.joints,
+           "pose adjoint: sizes do not match the layout");
   const std::size_t V = L.vertices, J = L.joints, S = L.shapes;
   // world = s R animal + t
   glm::dvec3 d_translation(0.0);

@@ -3,6 +3,7 @@
 #include <zip.h>
 
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <sstream>
 
@@ -61,6 +62,8 @@ NpyArray parse_npy_checked(const std::vector<char>& b, const std::string& where)
   while (std::getline(ss, dim, ','))
     if (dim.find_first_not_of(" ") != std::string::npos) {
       a.shape.push_back(std::stoull(dim));
+      if (a.shape.back() != 0 && count > std::numeric_limits<std::uint64_t>::max() / a.shape.back())
+        throw InputError(where + ": shape too large");
       count *= a.shape.back();
     }
   const std::size_t data = start + header_length;
@@ -147,7 +150,12 @@ void write_npz(const std::filesystem::path& file, const std::vector<NpyWrite>& a
   std::vector<std::string> buffers;  // libzip reads them at zip_close
   buffers.reserve(arrays.size());
   for (const NpyWrite& a : arrays) {
-    buffers.push_back(npy_bytes(a, file.string() + ": array '" + a.name + "'"));
+    try {
+      buffers.push_back(npy_bytes(a, file.string() + ": array '" + a.name + "'"));
+    } catch (...) {
+      zip_discard(z);
+      throw;
+    }
     zip_source_t* src = zip_source_buffer(z, buffers.back().data(), buffers.back().size(), 0);
     if (!src || zip_file_add(z, (a.name + ".npy").c_str(), src, ZIP_FL_OVERWRITE) < 0) {
       if (src) zip_source_free(src);

@@ -82,6 +82,7 @@ std::vector<MatchThreshold> parse_thresholds(const std::string& text) {
       return UsageError("--thresholds '" + entry + "': " + why + " (expected DISTANCE:ANGLE such as 2cm:20 or 3mm:30, "
                         "or the sets cm and mm)");
     };
+    if (entry.empty()) throw bad("an empty entry");
     const std::size_t colon = entry.find(':');
     if (colon == std::string::npos) throw bad("no ':' between distance and angle");
     const std::string distance = entry.substr(0, colon), angle = entry.substr(colon + 1);

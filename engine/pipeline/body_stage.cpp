@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include "engine/body/posing.hpp"
 #include "engine/body/region_transfer.hpp"
@@ -49,11 +50,10 @@ std::vector<std::uint32_t> preview_views(const io::Scene& scene, int count) {
   const glm::dvec3 first = glm::dvec3(scene.cameras[0].camera_to_world[2]);
   while (int(views.size()) < count && views.size() < scene.cameras.size()) {
     std::uint32_t best = 0;
-    double best_score = 2;
+    double best_score = std::numeric_limits<double>::infinity();
     for (std::uint32_t k = 0; k < scene.cameras.size(); ++k) {
       if (std::find(views.begin(), views.end(), k) != views.end()) continue;
-      const double score = std::abs(glm::dot(first, glm::normalize(glm::dvec3(scene.cameras[k].camera_to_world[2])))) +
-                           0.01 * double(views.size() > 1 ? k : 0);
+      const double score = std::abs(glm::dot(first, glm::normalize(glm::dvec3(scene.cameras[k].camera_to_world[2]))));
       if (score < best_score) best_score = score, best = k;
     }
     views.push_back(best);
@@ -68,11 +68,15 @@ json ground_truth_metrics(const StageContext& c, const geometry::Mesh& labelled,
   const body::RegionAccuracy accuracy = body::region_accuracy(labelled, bald);
   json out = body::to_json(accuracy);
   out["reference"] = "gt/bald.ply";
-  if (gt->info.contains("eye_centres")) {
+  const json eyes_gt = gt->info.value("eye_centres", json());
+  const auto is_point = [](const json& j) {
+    return j.is_array() && j.size() == 3 && j[0].is_number() && j[1].is_number() && j[2].is_number();
+  };
+  if (eyes_gt.is_object() && is_point(eyes_gt.value("left", json())) && is_point(eyes_gt.value("right", json()))) {
     const auto point = [](const json& j) { return glm::dvec3(j[0].get<double>(), j[1].get<double>(), j[2].get<double>()); };
     const double mm = gt->cm_per_unit * 10.0;
-    out["eye_error_mm"] = {{"left", glm::distance(eyes.left, point(gt->info["eye_centres"]["left"])) * mm},
-                           {"right", glm::distance(eyes.right, point(gt->info["eye_centres"]["right"])) * mm}};
+    out["eye_error_mm"] = {{"left", glm::distance(eyes.left, point(eyes_gt["left"])) * mm},
+                           {"right", glm::distance(eyes.right, point(eyes_gt["right"])) * mm}};
   }
   log::info("body: labels on M_NeuS agree with the ground truth on ", 100.0 * accuracy.accuracy, " % of the surface");
   return out;

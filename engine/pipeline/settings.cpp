@@ -58,9 +58,21 @@ namespace detail {
 double setting_number(const std::string& where, const SettingInfo& info, const json& value) {
   const bool integer = info.type == SettingType::Integer;
   const std::string expected = std::string(integer ? "an integer" : "a number") + " in " + range_text(info);
-  if (!value.is_number() || value.is_boolean())
+  double v = 0;
+  if (value.is_string()) {  // as typed on the command line: the whole text must be the number
+    const std::string& text = value.get_ref<const std::string&>();
+    std::size_t used = 0;
+    try {
+      v = std::stod(text, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (text.empty() || used != text.size()) throw UsageError("--set " + where + ": expected " + expected + ", got " + value.dump());
+  } else if (value.is_number() && !value.is_boolean()) {
+    v = value.get<double>();
+  } else {
     throw UsageError("--set " + where + ": expected " + expected + ", got " + value.dump());
-  const double v = value.get<double>();
+  }
   if (!std::isfinite(v) || (integer && v != std::floor(v)) || v < info.min || v > info.max)
     throw UsageError("--set " + where + ": expected " + expected + ", got " + value.dump());
   return v;
@@ -68,6 +80,11 @@ double setting_number(const std::string& where, const SettingInfo& info, const j
 
 bool setting_flag(const std::string& where, const json& value) {
   if (value.is_boolean()) return value.get<bool>();
+  if (value.is_string()) {
+    const std::string& t = value.get_ref<const std::string&>();
+    if (t == "1" || t == "true") return true;
+    if (t == "0" || t == "false") return false;
+  }
   if (value.is_number_integer() && (value.get<std::int64_t>() == 0 || value.get<std::int64_t>() == 1))
     return value.get<std::int64_t>() == 1;
   throw UsageError("--set " + where + ": expected 0, 1, true or false, got " + value.dump());

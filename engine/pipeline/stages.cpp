@@ -24,10 +24,9 @@ void apply_setting(json& settings, const std::string& assignment) {
   if (dot == std::string::npos || eq == std::string::npos || dot == 0 || eq < dot + 2)
     throw UsageError("--set '" + assignment + "': expected stage.key=value, e.g. neus.steps=300");
   const std::string stage = assignment.substr(0, dot), key = assignment.substr(dot + 1, eq - dot - 1);
-  const std::string text = assignment.substr(eq + 1);
-  json value = json::parse(text, nullptr, false);
-  if (value.is_discarded()) value = text;
-  settings[stage][key] = value;
+  // Kept as typed: the stage's schema reads it as its setting's type, so a path like "1.50" or
+  // "null" stays the text the user wrote.
+  settings[stage][key] = assignment.substr(eq + 1);
 }
 
 json check_reconstruct_options(const std::vector<std::unique_ptr<Stage>>& stages, const ReconstructOptions& options) {

@@ -29,7 +29,7 @@ json check_reconstruct_options(const std::vector<std::unique_ptr<Stage>>& stages
 // files (sizes, truncation) before any stage runs, then runs the stages.
 std::vector<StageOutcome> reconstruct(gpu::Context& context, const ReconstructOptions& options);
 
-// Adds one "stage.key=value" override (value parsed as JSON, else kept as a string).
+// Adds one "stage.key=value" override, the value kept as the text typed (the schema converts it).
 void apply_setting(json& settings, const std::string& assignment);
 
 // For `--help-stage`: the stage's settings table (markdown for the README), or UsageError naming

@@ -257,7 +257,10 @@ TEST_CASE("reconstruct checks every option before it touches a file") {
   write(root / "a_file", "x");
   CHECK_THROWS_WITH_AS(pipeline::check_reconstruct_options(stages, {o.scene, root / "a_file", "draft", {}, o.settings}),
                        doctest::Contains("is an existing file"), InputError);
-  CHECK(pipeline::check_reconstruct_options(stages, o)["neus"]["steps"] == 10);
+  CHECK(pipeline::check_reconstruct_options(stages, o)["neus"]["steps"] == "10");  // as typed; the schema reads it
+  CHECK(stages.front()->settings().values("draft", {{"steps", "10"}})["steps"] == 10);
+  CHECK_THROWS_WITH_AS(stages.front()->settings().values("draft", {{"steps", "10x"}}), doctest::Contains("got \"10x\""),
+                       UsageError);
   CHECK_FALSE(fs::exists(o.work));  // nothing was created
   fs::remove_all(root);
 }
