@@ -4,4 +4,19 @@
 
 namespace nf {
 using json = nlohmann::json;
+
+// A 3-vector as [x, y, z] (glm vectors, float or double).
+template <class V>
+json json_vec3(const V& v) {
+  return json::array({v.x, v.y, v.z});
 }
+
+// A 4x4 matrix (glm, column-major) as four rows, as people read it.
+template <class M>
+json json_matrix_rows(const M& m) {
+  json rows = json::array();
+  for (int r = 0; r < 4; ++r) rows.push_back({m[0][r], m[1][r], m[2][r], m[3][r]});
+  return rows;
+}
+
+}  // namespace nf

@@ -26,13 +26,6 @@ BodySettings settings_of(const StageContext& c) {
   return body_settings().resolve(c.quality, c.settings.value("body", json::object()));
 }
 
-json vec_json(const glm::dvec3& v) { return {v.x, v.y, v.z}; }
-json mat_json(const glm::dmat4& m) {  // rows, as people read a matrix
-  json rows = json::array();
-  for (int r = 0; r < 4; ++r) rows.push_back({m[0][r], m[1][r], m[2][r], m[3][r]});
-  return rows;
-}
-
 // The cameras' mean up vector when they agree on one (a capture rig's usual case).
 body::FrameHints frame_hints(const io::Scene& scene) {
   glm::dvec3 sum(0.0);
@@ -96,7 +89,7 @@ std::vector<fs::path> BodyStage::inputs(const StageContext& c) const {
 
 json BodyStage::parameters(const StageContext& c) const {
   json cams = json::array();
-  for (const io::Camera& cam : c.scene.cameras) cams.push_back(vec_json(glm::dvec3(cam.camera_to_world[1])));
+  for (const io::Camera& cam : c.scene.cameras) cams.push_back(json_vec3(glm::dvec3(cam.camera_to_world[1])));
   return {{"stage_version", kStageVersion}, {"settings", body_settings().values(c.quality, c.settings.value("body", json::object()))},
           {"camera_ups", cams}};
 }
@@ -123,18 +116,18 @@ json BodyStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) {
   io::write_mesh_ply(out.fitted(), fit.fitted);
 
   const body::FittedEyes eyes = body::fitted_eyes(model, fit);
-  write_file_atomic(out.eyes(), json{{"left", vec_json(eyes.left)},
-                                     {"right", vec_json(eyes.right)},
+  write_file_atomic(out.eyes(), json{{"left", json_vec3(eyes.left)},
+                                     {"right", json_vec3(eyes.right)},
                                      {"distance", glm::distance(eyes.left, eyes.right)},
                                      {"unit", "scene units"}}
                                     .dump(2) + "\n");
   const glm::dmat4& a = fit.animal_to_world;
   const double scale = glm::length(glm::dvec3(a[0]));
-  write_file_atomic(out.animal_frame(), json{{"animal_to_world", mat_json(a)},
-                                             {"origin", vec_json(glm::dvec3(a[3]))},
-                                             {"left", vec_json(glm::dvec3(a[0]) / scale)},
-                                             {"up", vec_json(glm::dvec3(a[1]) / scale)},
-                                             {"forward", vec_json(glm::dvec3(a[2]) / scale)},
+  write_file_atomic(out.animal_frame(), json{{"animal_to_world", json_matrix_rows(a)},
+                                             {"origin", json_vec3(glm::dvec3(a[3]))},
+                                             {"left", json_vec3(glm::dvec3(a[0]) / scale)},
+                                             {"up", json_vec3(glm::dvec3(a[1]) / scale)},
+                                             {"forward", json_vec3(glm::dvec3(a[2]) / scale)},
                                              {"scene_units_per_model_unit", scale},
                                              {"axes", "x: the animal's right to left, y: up (against gravity), "
                                                       "z: tail to head"}}
@@ -157,7 +150,7 @@ json BodyStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) {
   write_file_atomic(out.params(), json{{"model", model.name},
                                        {"shape", shape},
                                        {"joint_rotations", pose},
-                                       {"animal_to_world", mat_json(a)},
+                                       {"animal_to_world", json_matrix_rows(a)},
                                        {"offsets_rms_model_units", offset_rms},
                                        {"stages", stages},
                                        {"hypotheses", fit.hypotheses},

@@ -44,14 +44,6 @@ class Stopwatch {
   std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
 
-json vec_json(glm::vec3 v) { return json::array({v.x, v.y, v.z}); }
-
-json mat_json(const glm::mat4& m) {
-  json rows = json::array();
-  for (int r = 0; r < 4; ++r) rows.push_back({m[0][r], m[1][r], m[2][r], m[3][r]});
-  return rows;
-}
-
 // The output folder must be new, or an earlier synth output when overwriting is allowed.
 void check_destination(const fs::path& out, bool overwrite) {
   if (!fs::exists(out)) return;
@@ -166,15 +158,15 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
   json shape = json::object();
   for (std::size_t s = 0; s < model.shape_count(); ++s) shape[model.shape_names[s]] = s < params.shape.size() ? params.shape[s] : 0.0f;
   json rotations = json::object();
-  for (std::size_t j = 0; j < model.joint_count(); ++j) rotations[model.joint_names[j]] = vec_json(params.joint_rotations[j]);
+  for (std::size_t j = 0; j < model.joint_count(); ++j) rotations[model.joint_names[j]] = json_vec3(params.joint_rotations[j]);
   json info{
       {"generator", "nf_gpu synth"},
       {"animal", o.animal},
       {"seed", o.seed},
       {"cm_per_unit", kCmPerUnit},
-      {"eye_centres", {{"left", vec_json(eyes.left)}, {"right", vec_json(eyes.right)}}},
+      {"eye_centres", {{"left", json_vec3(eyes.left)}, {"right", json_vec3(eyes.right)}}},
       {"eye_distance_cm", know.eye_distance_cm},
-      {"animal_to_world", mat_json(params.animal_to_world)},
+      {"animal_to_world", json_matrix_rows(params.animal_to_world)},
       {"region_names", region_names},
       {"strands", {{"count", fur.strands.strand_count()}, {"points_per_strand", o.points_per_strand},
                    {"render_radius", look.radius}}},
