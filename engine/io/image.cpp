@@ -95,19 +95,42 @@ Image read_image(const std::filesystem::path& path) {
   return img;
 }
 
-void write_png(const std::filesystem::path& path, const Image& img) {
+namespace {
+
+std::vector<std::uint8_t> eight_bit(const Image& img, const char* what) {
   if (img.channels < 1 || img.channels > 4 || img.pixels.size() != std::size_t(img.width) * img.height * img.channels)
-    throw InternalError("write_png: image of " + std::to_string(img.channels) + " channels does not match its size");
+    throw InternalError(std::string(what) + ": image of " + std::to_string(img.channels) + " channels does not match its size");
   std::vector<std::uint8_t> bytes(img.pixels.size());
   for (std::size_t i = 0; i < bytes.size(); ++i)
     bytes[i] = std::uint8_t(std::lround(std::clamp(std::isfinite(img.pixels[i]) ? img.pixels[i] : 0.f, 0.f, 1.f) * 255.f));
-  std::string encoded;
-  const auto sink = [](void* context, void* data, int n) { static_cast<std::string*>(context)->append(static_cast<char*>(data), std::size_t(n)); };
-  if (!stbi_write_png_to_func(sink, &encoded, int(img.width), int(img.height), int(img.channels), bytes.data(),
-                              int(img.width * img.channels)))
-    throw InputError(path.string() + ": PNG encoding failed");
-  write_file_atomic(path, encoded);
+  return bytes;
 }
+
+void append_to_string(void* context, void* data, int n) {
+  static_cast<std::string*>(context)->append(static_cast<char*>(data), std::size_t(n));
+}
+
+}  // namespace
+
+std::string encode_png(const Image& img) {
+  const std::vector<std::uint8_t> bytes = eight_bit(img, "encode_png");
+  std::string encoded;
+  if (!stbi_write_png_to_func(append_to_string, &encoded, int(img.width), int(img.height), int(img.channels), bytes.data(),
+                              int(img.width * img.channels)))
+    throw InternalError("PNG encoding failed");
+  return encoded;
+}
+
+std::string encode_jpeg(const Image& img, int quality) {
+  const std::vector<std::uint8_t> bytes = eight_bit(img, "encode_jpeg");
+  std::string encoded;
+  if (!stbi_write_jpg_to_func(append_to_string, &encoded, int(img.width), int(img.height), int(img.channels), bytes.data(),
+                              std::clamp(quality, 1, 100)))
+    throw InternalError("JPEG encoding failed");
+  return encoded;
+}
+
+void write_png(const std::filesystem::path& path, const Image& img) { write_file_atomic(path, encode_png(img)); }
 
 void write_exr(const std::filesystem::path& path, const Image& img) {
   if (img.channels < 1 || img.channels > 4 || img.pixels.size() != std::size_t(img.width) * img.height * img.channels)
@@ -134,6 +157,43 @@ std::vector<std::uint8_t> mask_of(const Image& img) {
   std::vector<std::uint8_t> mask(std::size_t(img.width) * img.height);
   for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = img.pixels[i * img.channels + channel] >= 0.5f ? 1 : 0;
   return mask;
+}
+
+Image crop(const Image& img, std::uint32_t x0, std::uint32_t y0, std::uint32_t x1, std::uint32_t y1) {
+  x1 = std::min(x1, img.width), y1 = std::min(y1, img.height);
+  x0 = std::min(x0, x1), y0 = std::min(y0, y1);
+  Image out{x1 - x0, y1 - y0, img.channels, {}};
+  out.pixels.resize(std::size_t(out.width) * out.height * out.channels);
+  for (std::uint32_t y = 0; y < out.height; ++y)
+    std::copy_n(img.pixels.begin() + std::ptrdiff_t((std::size_t(y0 + y) * img.width + x0) * img.channels),
+                std::size_t(out.width) * img.channels, out.pixels.begin() + std::ptrdiff_t(std::size_t(y) * out.width * out.channels));
+  return out;
+}
+
+Image downscale_to(const Image& img, std::uint32_t max_side) {
+  const std::uint32_t longer = std::max(img.width, img.height);
+  if (longer <= max_side || max_side == 0) return img;
+  const double f = double(longer) / double(max_side);
+  Image out{std::max(1u, std::uint32_t(std::lround(img.width / f))), std::max(1u, std::uint32_t(std::lround(img.height / f))),
+            img.channels, {}};
+  out.pixels.assign(std::size_t(out.width) * out.height * out.channels, 0.f);
+  const double sx = double(img.width) / out.width, sy = double(img.height) / out.height;
+  // Each output pixel averages the source pixels its footprint covers, weighted by overlap.
+  for (std::uint32_t y = 0; y < out.height; ++y)
+    for (std::uint32_t x = 0; x < out.width; ++x) {
+      const double ax = x * sx, bx = (x + 1) * sx, ay = y * sy, by = (y + 1) * sy;
+      double weight = 0;
+      float* o = &out.pixels[(std::size_t(y) * out.width + x) * out.channels];
+      for (std::uint32_t v = std::uint32_t(ay); v < std::min<double>(by, img.height); ++v)
+        for (std::uint32_t u = std::uint32_t(ax); u < std::min<double>(bx, img.width); ++u) {
+          const double w = (std::min<double>(bx, u + 1) - std::max<double>(ax, u)) * (std::min<double>(by, v + 1) - std::max<double>(ay, v));
+          if (w <= 0) continue;
+          weight += w;
+          for (std::uint32_t c = 0; c < img.channels; ++c) o[c] += float(w * img.at(u, v, c));
+        }
+      for (std::uint32_t c = 0; c < img.channels; ++c) o[c] = weight > 0 ? float(o[c] / weight) : 0.f;
+    }
+  return out;
 }
 
 }  // namespace nf::io

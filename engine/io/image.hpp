@@ -5,6 +5,7 @@
 // atomic: PNG (8 bit) and EXR (32-bit float).
 #include <cstdint>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 namespace nf::io {
@@ -20,10 +21,18 @@ struct Image {
 // Throws InputError naming the file and the reason (missing, truncated, unsupported).
 Image read_image(const std::filesystem::path& path);
 void write_png(const std::filesystem::path& path, const Image& image);  // 8 bit, values clamped to [0, 1]
+// The bytes of a PNG or JPEG file (8 bit, values clamped to [0, 1]; JPEG: 1 or 3 channels).
+std::string encode_png(const Image& image);
+std::string encode_jpeg(const Image& image, int quality);
 void write_exr(const std::filesystem::path& path, const Image& image);  // 32-bit float channels
 
 // A mask from an image: its alpha channel when it has one (2 or 4 channels), else its first
 // channel, thresholded at 0.5. 1 = inside.
 std::vector<std::uint8_t> mask_of(const Image& image);
+
+// The pixels of [x0, x1) x [y0, y1) (clamped to the image).
+Image crop(const Image& image, std::uint32_t x0, std::uint32_t y0, std::uint32_t x1, std::uint32_t y1);
+// Shrunk by area averaging so that its longer side is at most `max_side` (unchanged when it fits).
+Image downscale_to(const Image& image, std::uint32_t max_side);
 
 }  // namespace nf::io
