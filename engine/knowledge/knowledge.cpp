@@ -1,6 +1,7 @@
 #include "engine/knowledge/knowledge.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 
@@ -61,6 +62,9 @@ Knowledge knowledge_from_json(const json& j, const std::string& source) {
       if (!entry.contains(key)) throw InputError(where + ": missing field '" + key + "'");
     r.length_cm = finite_number(entry["length_cm"], where + ".length_cm", 0.0f, 500.0f);
     r.thickness_cm = finite_number(entry["thickness_cm"], where + ".thickness_cm", 0.0f, 500.0f);
+    if (r.thickness_cm > r.length_cm)
+      throw InputError(where + ".thickness_cm = " + std::to_string(r.thickness_cm) + " exceeds its length_cm = " +
+                       std::to_string(r.length_cm) + " (the fur removed cannot be thicker than the fur is long)");
     const json& d = entry["direction"];
     if (!d.is_array() || d.size() != 3) throw InputError(where + ".direction must be an array of 3 numbers");
     for (int c = 0; c < 3; ++c) r.direction[c] = finite_number(d[c], where + ".direction[" + std::to_string(c) + "]", -1e6f, 1e6f);
@@ -97,6 +101,23 @@ Knowledge read_knowledge(const std::filesystem::path& path) {
 
 void write_knowledge(const std::filesystem::path& path, const Knowledge& k) {
   write_file_atomic(path, knowledge_to_json(k).dump(2) + "\n");
+}
+
+std::string region_table(const Knowledge& k) {
+  std::ostringstream out;
+  char line[160];
+  std::snprintf(line, sizeof line, "%-16s %10s %13s   %s\n", "region", "length cm", "thickness cm", "growth direction (x left, y up, z forward)");
+  out << line;
+  for (int i = 0; i < body::kRegionCount; ++i) {
+    const auto& r = k.regions[std::size_t(i)];
+    if (!r) continue;
+    std::snprintf(line, sizeof line, "%-16s %10.2f %13.2f   [%6.2f %6.2f %6.2f]%s\n", std::string(body::kRegionNames[std::size_t(i)]).c_str(),
+                  r->length_cm, r->thickness_cm, r->direction.x, r->direction.y, r->direction.z, r->length_cm > 0 ? "" : "  bald");
+    out << line;
+  }
+  std::snprintf(line, sizeof line, "eye distance %.2f cm; source %s\n", k.eye_distance_cm, k.source.c_str());
+  out << line;
+  return out.str();
 }
 
 std::vector<std::string> preset_names() {

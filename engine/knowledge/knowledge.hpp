@@ -38,6 +38,8 @@ Knowledge knowledge_from_json(const json& j, const std::string& source);
 json knowledge_to_json(const Knowledge& k);
 Knowledge read_knowledge(const std::filesystem::path& path);
 void write_knowledge(const std::filesystem::path& path, const Knowledge& k);
+// The regions as a table for people (what `nf_gpu annotate` prints).
+std::string region_table(const Knowledge& k);
 
 // Built-in presets: cat, dog, fox, panda, tiger, lion. Throws UsageError listing them.
 Knowledge preset(const std::string& animal);

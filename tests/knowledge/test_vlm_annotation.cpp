@@ -1,0 +1,197 @@
+// One VLM annotation without a network (a scripted model): the paper's prompts asked in order as one
+// conversation with the photos in the first message, a single retry of an unusable answer, the fill
+// rules for regions left out, the consensus of several annotations and the metric scale.
+#include <doctest/doctest.h>
+
+#include <random>
+
+#include "engine/core/error.hpp"
+#include "engine/knowledge/answer_parsing.hpp"
+#include "engine/knowledge/consensus.hpp"
+#include "engine/knowledge/metric_scale.hpp"
+#include "engine/knowledge/prompts.hpp"
+#include "engine/knowledge/vlm_annotation.hpp"
+#include "tests/knowledge/recorded_answers.hpp"
+
+using namespace nf;
+using namespace nf::knowledge;
+using body::Region;
+
+namespace {
+
+struct ScriptedModel {
+  std::map<std::string, std::string> answers = test::good_answers();
+  std::vector<json> requests;
+  std::vector<std::string> steps;
+  std::string operator()(const json& messages, const std::string& step) {
+    requests.push_back(messages);
+    steps.push_back(step);
+    const std::string asked = test::asked_step(messages);
+    const auto it = answers.find(asked);
+    return it != answers.end() ? it->second : std::string();
+  }
+};
+
+const AnnotationImages kImages{"data:image/jpeg;base64,AAAA", "data:image/jpeg;base64,BBBB"};
+
+}  // namespace
+
+TEST_CASE("the five prompts, one conversation, the photos first") {
+  ScriptedModel model;
+  const Annotation a = annotate_with_vlm(std::ref(model), kImages, "test");
+  REQUIRE(model.requests.size() == 5);
+  CHECK(model.steps == std::vector<std::string>{"length", "thickness", "verify", "direction", "eyes"});
+  // Each request carries everything before it: the system prompt, the questions and the answers.
+  for (std::size_t i = 0; i < 5; ++i) CHECK(model.requests[i].size() == 2 + 2 * i);
+  CHECK(model.requests[0][0]["role"] == "system");
+  const json& first = model.requests[0][1]["content"];
+  REQUIRE(first.is_array());
+  CHECK(first[0]["image_url"]["url"] == kImages.frontal);
+  CHECK(first[1]["image_url"]["url"] == kImages.side_with_axes);
+  CHECK(first[2]["text"].get<std::string>().find(paper_prompts()[0].text) == 0);  // the paper's words, verbatim
+  CHECK(model.requests[4][8]["content"] == test::good_answers()["direction"]);    // later prompts see earlier answers
+
+  const Knowledge& k = a.knowledge;
+  CHECK(k.eye_distance_cm == doctest::Approx(3.2));
+  CHECK(k.at(Region::body).length_cm == doctest::Approx(1.1));  // the verification's correction
+  CHECK(k.at(Region::tail).length_cm == doctest::Approx(1.4));
+  CHECK(k.at(Region::body).thickness_cm == doctest::Approx(0.4));
+  CHECK(k.at(Region::leg_rear).length_cm == doctest::Approx(0.9));  // kept from the first answer
+  CHECK(k.grows_fur(Region::mane));
+  CHECK_FALSE(k.grows_fur(Region::eyes));
+  CHECK(glm::length(k.at(Region::neck).direction) == doctest::Approx(1.0));
+  CHECK(a.requests == 5);
+}
+
+TEST_CASE("an unusable answer is asked again once, then refused with the region and field") {
+  ScriptedModel model;
+  model.answers["length"] = R"({"body": 75, "tail": 2})";
+  CHECK_THROWS_WITH_AS(annotate_with_vlm(std::ref(model), kImages, "test"),
+                       doctest::Contains("length prompt: regions.body.length_cm = 75"), InputError);
+  CHECK(model.steps == std::vector<std::string>{"length", "length-retry"});
+  CHECK(test::prompt_step(model.requests[1]) == "retry");
+
+  // Fixed on the second try: the run goes on, with a warning.
+  ScriptedModel fixed;
+  int calls = 0;
+  const ChatFunction chat = [&](const json& messages, const std::string& step) {
+    ++calls;
+    return calls == 1 ? std::string("I think the fur is long.") : fixed(messages, step);
+  };
+  const Annotation a = annotate_with_vlm(chat, kImages, "test");
+  CHECK(a.requests == 6);
+  CHECK(std::any_of(a.warnings.begin(), a.warnings.end(), [](const std::string& w) { return w.find("asked again") != std::string::npos; }));
+
+  ScriptedModel zero;
+  zero.answers["direction"] = R"({"body": [0, 0, 0], "tail": [0, 0, -1]})";
+  CHECK_THROWS_WITH_AS(annotate_with_vlm(std::ref(zero), kImages, "test"), doctest::Contains("regions.body.direction"), InputError);
+  ScriptedModel far;
+  far.answers["eyes"] = "About 120 cm.";
+  CHECK_THROWS_WITH_AS(annotate_with_vlm(std::ref(far), kImages, "test"), doctest::Contains("eye_distance_cm = 120"), InputError);
+  ScriptedModel thick;
+  thick.answers["thickness"] = R"({"body": -0.5})";
+  CHECK_THROWS_WITH_AS(annotate_with_vlm(std::ref(thick), kImages, "test"), doctest::Contains("regions.body.thickness_cm"), InputError);
+}
+
+TEST_CASE("regions left out are filled by the documented rules and listed") {
+  PartialKnowledge p;
+  p.length[size_t(Region::body)] = 2.0;
+  p.length[size_t(Region::ears)] = 0.5;
+  p.length[size_t(Region::tail)] = 4.0;
+  p.thickness[size_t(Region::body)] = 3.0;  // thicker than long: clamped
+  p.direction[size_t(Region::body)] = glm::vec3(0, 0, -1);
+  std::vector<std::string> warnings;
+  const Knowledge k = fill_missing_regions(p, warnings, "test");
+  CHECK(k.at(Region::inner_earcanal).length_cm == doctest::Approx(0.5));  // = ears, as the prompt says
+  CHECK(k.at(Region::under_tail).length_cm == doctest::Approx(4.0));      // = tail
+  CHECK(k.at(Region::neck).length_cm == doctest::Approx(2.0));            // = body
+  CHECK(k.at(Region::face).length_cm == doctest::Approx(2.0));            // = neck = body
+  CHECK_FALSE(k.grows_fur(Region::eyes));
+  CHECK_FALSE(k.grows_fur(Region::nosetip));
+  CHECK_FALSE(k.grows_fur(Region::paw_pads));
+  CHECK_FALSE(k.has(Region::mane));
+  CHECK(k.at(Region::body).thickness_cm == doctest::Approx(2.0));
+  CHECK(k.at(Region::tail).thickness_cm == doctest::Approx(0.35 * 4.0));
+  CHECK(glm::distance(k.at(Region::tail).direction, glm::vec3(0, 0, -1)) < 1e-6f);
+  CHECK(warnings.size() >= 4);
+
+  PartialKnowledge none;
+  none.length[size_t(Region::tail)] = 1.0;
+  CHECK_THROWS_WITH_AS(fill_missing_regions(none, warnings, "test"), doctest::Contains("'body'"), InputError);
+}
+
+TEST_CASE("consensus: median lengths, mean directions, flagged disagreement") {
+  std::vector<Knowledge> samples(3);
+  const float lengths[3] = {1.0f, 1.2f, 5.0f};
+  for (int i = 0; i < 3; ++i) {
+    samples[i].eye_distance_cm = 3.0f + float(i);
+    samples[i].regions[size_t(Region::body)] = RegionKnowledge{lengths[i], 0.3f, glm::normalize(glm::vec3(0.1f * float(i), -1, 0))};
+    samples[i].regions[size_t(Region::tail)] = RegionKnowledge{2.0f, 0.5f, glm::vec3(0, 0, -1)};
+  }
+  samples[0].regions[size_t(Region::mane)] = RegionKnowledge{9.0f, 3.0f, glm::vec3(0, -1, 0)};  // one in three: dropped
+  const Consensus c = consensus(samples);
+  CHECK(c.knowledge.at(Region::body).length_cm == doctest::Approx(1.2));
+  CHECK(c.knowledge.eye_distance_cm == doctest::Approx(4.0));
+  CHECK(glm::length(c.knowledge.at(Region::body).direction) == doctest::Approx(1.0));
+  CHECK_FALSE(c.knowledge.has(Region::mane));
+  REQUIRE(c.flagged.size() == 1);
+  CHECK(c.flagged[0] == "body");
+  CHECK(c.spread["body"]["length_cm"][1] == doctest::Approx(5.0));
+}
+
+TEST_CASE("metric scale: given beats declared beats the eyes; a disagreement is a warning") {
+  const MetricScale eyes = metric_scale(3.2, 0.04, std::nullopt, std::nullopt);
+  CHECK(eyes.source == "eyes");
+  CHECK(eyes.cm_per_unit == doctest::Approx(80.0));
+  const MetricScale declared = metric_scale(3.2, 0.04, 100.0, std::nullopt);
+  CHECK(declared.source == "scene");
+  CHECK(declared.cm_per_unit == doctest::Approx(100.0));
+  CHECK(*declared.disagreement == doctest::Approx(0.25));
+  CHECK(declared.warning.find("25 %") != std::string::npos);
+  const MetricScale given = metric_scale(3.2, 0.04, 100.0, 85.0);
+  CHECK(given.source == "--scene-scale");
+  CHECK(given.warning.empty());  // 6 % apart
+  CHECK_THROWS_WITH_AS(metric_scale(3.2, 0.0, std::nullopt, std::nullopt), doctest::Contains("--scene-scale"), InputError);
+}
+
+TEST_CASE("hostile answers: mutated, deeply nested or huge, they end in a value or an InputError") {
+  // Mutations of good answers (bytes flipped, cut, repeated): never a crash, never another exception.
+  std::mt19937 rng(7);
+  const auto good = test::good_answers();
+  int readable = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    std::map<std::string, std::string> answers = good;
+    for (auto& [step, text] : answers) {
+      const int edits = int(rng() % 4);
+      for (int e = 0; e < edits && !text.empty(); ++e) {
+        const std::size_t at = rng() % text.size();
+        switch (rng() % 4) {
+          case 0: text[at] = char(rng() % 128); break;
+          case 1: text.erase(at, rng() % 8); break;
+          case 2: text.insert(at, text.substr(at, rng() % 16)); break;
+          default: text.insert(at, 1, "{}[]():,'\"-.eE0"[rng() % 15]); break;
+        }
+      }
+    }
+    const ChatFunction chat = [&](const json& messages, const std::string&) { return answers[test::asked_step(messages)]; };
+    try {
+      const Annotation a = annotate_with_vlm(chat, kImages, "fuzz");
+      ++readable;
+      for (int r = 0; r < body::kRegionCount; ++r)
+        if (a.knowledge.regions[size_t(r)]) {
+          const RegionKnowledge& k = *a.knowledge.regions[size_t(r)];
+          CHECK((k.length_cm >= 0 && k.length_cm <= kMaxLengthCm && k.thickness_cm <= k.length_cm));
+          CHECK(std::fabs(glm::length(k.direction) - 1.0f) < 1e-4f);
+        }
+    } catch (const InputError&) {
+    }
+  }
+  CHECK(readable > 30);  // some mutations leave every answer readable (about 1 in 40)
+
+  // 4 MB of nested braces, quotes and digits: bounded work, no object, no crash.
+  std::string deep(std::size_t(4) << 20, '{');
+  for (std::size_t i = 0; i < deep.size(); i += 3) deep[i] = i % 2 ? '}' : '\'';
+  CHECK(find_objects(deep).size() < 300);
+  std::string digits(std::size_t(2) << 20, '7');
+  CHECK_THROWS_AS(eye_distance_cm_of(digits, "eyes"), InputError);
+}
