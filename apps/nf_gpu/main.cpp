@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 
 #include "engine/bench/suites.hpp"
 #include "engine/body/quadruped.hpp"
@@ -15,6 +16,8 @@
 #include "engine/gpu/context.hpp"
 #include "engine/gradcheck/catalog.hpp"
 #include "engine/metrics/metrics_report.hpp"
+#include "engine/knowledge/knowledge.hpp"
+#include "engine/pipeline/knowledge_stage.hpp"
 #include "engine/synth/preview.hpp"
 #include "engine/orient/scene_orientation.hpp"
 #include "engine/pipeline/stages.hpp"
@@ -174,17 +177,25 @@ int run_bench(const nf::bench::Options& options, const std::string& json_path, b
   return 0;
 }
 
+// Runs the stages; on Ctrl-C prints how to resume and returns nullopt (the caller exits with 130).
+std::optional<std::vector<nf::pipeline::StageOutcome>> run_stages(nf::gpu::Context& context,
+                                                                  const nf::pipeline::ReconstructOptions& options,
+                                                                  const std::string& command_line) {
+  nf::install_interrupt_handler();
+  try {
+    return nf::pipeline::reconstruct(context, options);
+  } catch (const nf::Interrupted& e) {
+    std::cerr << "nf_gpu: " << e.what() << "\nresume with the same command: " << command_line << "\n";
+    return std::nullopt;
+  }
+}
+
 int run_reconstruct(const nf::pipeline::ReconstructOptions& options, bool as_json, bool profile,
                     const std::string& command_line) {
   nf::gpu::Context context;
-  nf::install_interrupt_handler();
-  std::vector<nf::pipeline::StageOutcome> outcomes;
-  try {
-    outcomes = nf::pipeline::reconstruct(context, options);
-  } catch (const nf::Interrupted& e) {
-    std::cerr << "nf_gpu: " << e.what() << "\nresume with the same command: " << command_line << "\n";
-    return int(e.code());
-  }
+  const auto ran = run_stages(context, options, command_line);
+  if (!ran) return int(nf::ExitCode::Interrupted);
+  const auto& outcomes = *ran;
   if (profile) print_profile(context);
   if (as_json) {
     json out = json::array();
@@ -197,6 +208,28 @@ int run_reconstruct(const nf::pipeline::ReconstructOptions& options, bool as_jso
     std::printf("%-10s %s%s\n", o.name.c_str(), o.ran ? "ran in " : "unchanged, skipped",
                 o.ran ? (std::to_string(o.seconds) + " s").c_str() : "");
   std::printf("outputs in %s\n", options.work.string().c_str());
+  return 0;
+}
+
+// `nf_gpu annotate`: the stages up to knowledge, then the region table, the scale and the warnings.
+int run_annotate(const nf::pipeline::ReconstructOptions& options, bool as_json, const std::string& command_line) {
+  nf::gpu::Context context;
+  const auto ran = run_stages(context, options, command_line);
+  if (!ran) return int(nf::ExitCode::Interrupted);
+  const auto& outcomes = *ran;
+  const nf::pipeline::KnowledgeOutputs out = nf::pipeline::knowledge_outputs(options.work);
+  const nf::knowledge::Knowledge k = nf::knowledge::read_knowledge(out.knowledge());
+  const json summary = outcomes.back().summary;
+  if (as_json) {
+    std::cout << json{{"knowledge", nf::knowledge::knowledge_to_json(k)}, {"summary", summary}}.dump(2) << "\n";
+    return 0;
+  }
+  std::cout << nf::knowledge::region_table(k);
+  const json scale = summary.value("scale", json::object());
+  std::printf("scale: %.6g cm per scene unit (from %s)\n", scale.value("cm_per_unit", 0.0), scale.value("source", std::string("?")).c_str());
+  for (const json& w : summary.value("warnings", json::array())) std::printf("warning: %s\n", w.get<std::string>().c_str());
+  std::printf("%s (edit it and feed it back with --set knowledge.file=%s)\n", out.knowledge().string().c_str(),
+              out.knowledge().string().c_str());
   return 0;
 }
 
@@ -314,8 +347,26 @@ int main(int argc, char** argv) {
   reconstruct->add_option("--to", reconstruct_options.run.to, "run only this stage and the stages it depends on");
   reconstruct->add_option("--set", reconstruct_options.settings, "override a stage setting: stage.key=value (repeatable)");
   reconstruct->add_flag("--json", reconstruct_json, "machine-readable summary");
+  double scene_scale = 0;
+  reconstruct->add_option("--scene-scale", scene_scale, "the scene's unit in cm (overrides the scene file and the eyes)")
+      ->check(CLI::PositiveNumber);
   reconstruct->add_option("--help-stage", help_stage, "print the settings of this stage and exit");
   reconstruct->add_flag("--markdown", help_markdown, "with --help-stage: a markdown table");
+
+  nf::pipeline::ReconstructOptions annotate_options;
+  std::string annotate_scene, annotate_out;
+  bool annotate_json = false;
+  double annotate_scale = 0;
+  auto* annotate = app.add_subcommand("annotate", "the knowledge stage (and what it needs): fur per region from a VLM, a preset or a file");
+  annotate->add_option("--scene", annotate_scene, "scene folder or transforms.json")->required();
+  annotate->add_option("--out", annotate_out, "WORK folder (shared with reconstruct)")->required();
+  annotate->add_option("--quality", annotate_options.quality, "quality of the stages before it (default: default)")
+      ->check(CLI::IsMember(nf::pipeline::quality_names()));
+  annotate->add_option("--set", annotate_options.settings,
+                       "stage.key=value, e.g. knowledge.preset=cat, or knowledge.vlm=URL knowledge.model=NAME (repeatable)");
+  annotate->add_option("--scene-scale", annotate_scale, "the scene's unit in cm (overrides the scene file and the eyes)")
+      ->check(CLI::PositiveNumber);
+  annotate->add_flag("--json", annotate_json, "machine-readable output");
 
   try {
     app.parse(argc, argv);
@@ -343,7 +394,13 @@ int main(int argc, char** argv) {
       if (scene_option->count() == 0 || out_option->count() == 0)
         throw nf::UsageError("reconstruct needs --scene and --out (nf_gpu reconstruct --help)");
       reconstruct_options.scene = reconstruct_scene, reconstruct_options.work = reconstruct_out;
+      if (scene_scale > 0) reconstruct_options.settings.push_back("knowledge.cm_per_unit=" + json(scene_scale).dump());
       return run_reconstruct(reconstruct_options, reconstruct_json, profile, quoted_command_line(argc, argv));
+    }
+    if (*annotate) {
+      annotate_options.scene = annotate_scene, annotate_options.work = annotate_out, annotate_options.run.to = "knowledge";
+      if (annotate_scale > 0) annotate_options.settings.push_back("knowledge.cm_per_unit=" + json(annotate_scale).dump());
+      return run_annotate(annotate_options, annotate_json, quoted_command_line(argc, argv));
     }
     if (*orient) {
       orient_options.scene = orient_scene, orient_options.out = orient_out;

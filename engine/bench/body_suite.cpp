@@ -9,6 +9,7 @@
 #include "engine/bench/record.hpp"
 #include "engine/core/log.hpp"
 #include "engine/pipeline/body_stage.hpp"
+#include "engine/pipeline/knowledge_stage.hpp"
 #include "engine/pipeline/stages.hpp"
 #include "engine/synth/synth_scene.hpp"
 
@@ -43,11 +44,11 @@ json run_body_suite(gpu::Context& ctx, const Options& options) {
       if (!fs::exists(scene / "gt" / "scene.json")) synth::synthesize_scene(scene, so);
       pipeline::ReconstructOptions ro;
       ro.scene = scene, ro.work = work, ro.quality = "draft";
-      ro.run.to = "body";
+      ro.run.to = "knowledge";  // the body, then the scale its eyes give with the animal's preset
       ro.run.from = "body";  // measured every run; the NeuS surface is reused when cached (NF_BENCH_BODY_DIR)
       // NeuS at the draft preset (shortened): the surface is the input here. The body stage at its
       // default preset, the paper's 20,000 samples a step (text settings are left at their default).
-      ro.settings = {"neus.steps=" + std::to_string(neus_steps)};
+      ro.settings = {"neus.steps=" + std::to_string(neus_steps), "knowledge.preset=" + animal};
       const json body_defaults = pipeline::body_settings().values("default", json::object());
       for (const auto& [key, value] : body_defaults.items())
         if (!value.is_string()) ro.settings.push_back("body." + key + "=" + value.dump());
@@ -67,6 +68,15 @@ json run_body_suite(gpu::Context& ctx, const Options& options) {
         metrics["label_accuracy"] = gt.at("accuracy");
         metrics["recall"] = gt.at("recall");
         if (gt.contains("eye_error_mm")) metrics["eye_error_mm"] = gt["eye_error_mm"];
+      }
+      // The paper's metric scale (preset eye distance over the fitted eyes' distance) against the
+      // scene's true unit, and the fitted eye distance alone against the body's true one.
+      std::ifstream kin(pipeline::knowledge_outputs(work).metrics());
+      const json km = json::parse(kin);
+      if (km.contains("ground_truth")) {
+        const json& kg = km["ground_truth"];
+        for (const char* key : {"scale_from_eyes_error", "eye_distance_error", "frame_error_degrees"})
+          if (kg.contains(key)) metrics[key] = kg[key];
       }
       const json params{{"animal", animal}, {"seed", seed}, {"views", so.views}, {"resolution", so.resolution},
                         {"neus_steps", neus_steps}, {"neus_quality", "draft"}, {"body_quality", "default"}};

@@ -121,6 +121,13 @@ void require_inputs(const Stage& stage, const StageContext& c, const StageGraph&
 
 }  // namespace
 
+std::vector<std::string> stages_needed(const std::vector<std::unique_ptr<Stage>>& stages, const std::string& to) {
+  const StageGraph graph = stage_graph(stages);
+  std::vector<std::string> names;
+  for (const std::size_t i : graph.needed_for(to)) names.push_back(graph.names[i]);
+  return names;
+}
+
 fs::path stage_record(const fs::path& work, const std::string& stage) { return work / stage / "stage.json"; }
 
 std::vector<StageOutcome> run_pipeline(const std::vector<std::unique_ptr<Stage>>& stages, StageContext& c,

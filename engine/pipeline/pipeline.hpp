@@ -35,6 +35,9 @@ struct StageOutcome {
 std::vector<StageOutcome> run_pipeline(const std::vector<std::unique_ptr<Stage>>& stages, StageContext& context,
                                        const RunOptions& options);
 
+// The stages a run with `--to to` needs: `to` and what it depends on, or all when `to` is empty.
+std::vector<std::string> stages_needed(const std::vector<std::unique_ptr<Stage>>& stages, const std::string& to);
+
 // The record file of a finished stage.
 std::filesystem::path stage_record(const std::filesystem::path& work, const std::string& stage);
 

@@ -39,7 +39,7 @@ std::string number_text(double v) {
 
 std::string range_text(const SettingInfo& i) {
   if (i.type == SettingType::Flag) return "0 or 1";
-  if (i.type == SettingType::Text) return i.choices.empty() ? "any" : join(i.choices, " | ");
+  if (i.type == SettingType::Text) return i.choices.empty() ? "any" : join(i.choices, ", ");
   if (i.type == SettingType::Integer) return "[" + std::to_string(std::int64_t(i.min)) + ", " + std::to_string(std::int64_t(i.max)) + "]";
   return "[" + number_text(i.min) + ", " + number_text(i.max) + "]";
 }

@@ -35,6 +35,11 @@ class Stage {
   virtual std::vector<std::string> depends_on() const { return {}; }
   // The stage's `--set` settings; validated for every stage before any stage runs.
   virtual const StageSettings& settings() const = 0;
+  // Checked before any stage runs, for a stage that this run needs: what only matters when it
+  // runs (a choice it cannot do without). Throws UsageError.
+  virtual void check_needed_settings(const std::string& quality, const json& overrides) const {
+    (void)quality, (void)overrides;
+  }
   // Files read (scene files, or earlier stages' outputs under WORK); their content is hashed.
   // A missing file under WORK/<stage>/ is reported as "run stage <stage>".
   virtual std::vector<std::filesystem::path> inputs(const StageContext& context) const = 0;

@@ -6,6 +6,7 @@
 #include "engine/core/output_guard.hpp"
 #include "engine/core/text.hpp"
 #include "engine/pipeline/body_stage.hpp"
+#include "engine/pipeline/knowledge_stage.hpp"
 #include "engine/pipeline/neus_stage.hpp"
 
 namespace nf::pipeline {
@@ -15,7 +16,8 @@ std::vector<std::unique_ptr<Stage>> reconstruction_stages() {
   std::vector<std::unique_ptr<Stage>> stages;
   stages.push_back(std::make_unique<NeusStage>());
   stages.push_back(std::make_unique<BodyStage>());
-  // Next, as they land: knowledge, defur, frames, fur, export.
+  stages.push_back(std::make_unique<KnowledgeStage>());
+  // Next, as they land: defur, frames, fur, export.
   return stages;
 }
 
@@ -54,6 +56,10 @@ json check_reconstruct_options(const std::vector<std::unique_ptr<Stage>>& stages
   require_folder_or_absent(options.work, "--out");
   const fs::path scene_abs = fs::absolute(options.scene);
   refuse_output_inside(options.work, fs::is_directory(scene_abs) ? scene_abs : scene_abs.parent_path(), "--out", "scene");
+  const std::vector<std::string> needed = stages_needed(stages, options.run.to);
+  for (const auto& s : stages)
+    if (std::find(needed.begin(), needed.end(), s->name()) != needed.end())
+      s->check_needed_settings(options.quality, settings.value(s->name(), json::object()));
   return settings;
 }
 

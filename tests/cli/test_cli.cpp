@@ -301,7 +301,13 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   REQUIRE(run("synth --animal cat --views 8 --res 64 --strands 4000 --spp-axis 1 --out " + scene.string()).code == 0);
   const std::string tiny = " --quality draft --set neus.steps=12 --set neus.rays=128 --set neus.samples_per_ray=16 --set neus.fine_samples=8"
                            " --set neus.hull_fit_steps=5 --set neus.mesh_resolution=48 --set neus.hull_resolution=48";
-  const Result first = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny);
+  // The knowledge stage needs a source: without one the run stops before any stage, naming the ways.
+  const Result unsourced = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny);
+  CHECK(unsourced.code == 2);
+  CHECK(unsourced.output.find("knowledge.preset=NAME (presets: cat, dog") != std::string::npos);
+  CHECK(unsourced.output.find("knowledge.vlm=URL") != std::string::npos);
+  CHECK_FALSE(fs::exists(work));
+  const Result first = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + " --to neus");
   INFO(first.output);
   REQUIRE(first.code == 0);
   for (const char* f : {"neus/outer.ply", "neus/model.nfwt", "neus/normalisation.json", "neus/metrics.json",
@@ -315,7 +321,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   CHECK(m.contains("ground_truth"));  // a synth scene: chamfer against gt/outer.ply
   CHECK(m["held_out"]["views"].size() == 1);
 
-  const Result again = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + " --json");
+  const Result again = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + " --to neus --json");
   REQUIRE(again.code == 0);
   REQUIRE(again.output.find('[') != std::string::npos);
   const nf::json outcome = nf::json::parse(again.output.substr(again.output.find('[')));
@@ -343,10 +349,53 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   CHECK(truth["accuracy"].get<double>() <= 1.0);
   CHECK(truth["recall"].contains("tail"));
   CHECK(truth.contains("eye_error_mm"));
-  const Result again_body = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + body + " --from body --json");
+  const Result again_body = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + body + " --from body --to body --json");
   REQUIRE(again_body.code == 0);
   const nf::json rerun = nf::json::parse(again_body.output.substr(again_body.output.find('[')));
   CHECK((rerun[0]["ran"] == false && rerun[1]["ran"] == true));  // --from body reruns body, not neus
+
+  // The knowledge stage from a preset: the knowledge, world directions and the scale (the synth
+  // scene declares its unit; the eyes' estimate is reported beside it).
+  const Result known = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + body +
+                           " --set knowledge.preset=cat --json");
+  INFO(known.output);
+  REQUIRE(known.code == 0);
+  const nf::json all = nf::json::parse(known.output.substr(known.output.find('[')));
+  REQUIRE(all.size() == 3);
+  CHECK((all[0]["ran"] == false && all[1]["ran"] == false && all[2]["ran"] == true));
+  const nf::json& ks = all[2]["summary"];
+  CHECK(ks["source"] == "preset:cat");
+  CHECK(ks["scale"]["source"] == "scene");
+  CHECK(ks["scale"]["cm_per_unit"].get<double>() == doctest::Approx(100.0));
+  CHECK(ks["scale"]["from_eyes"].get<double>() > 0.0);
+  CHECK(ks["ground_truth"].contains("scale_from_eyes_error"));
+  for (const char* f : {"knowledge/knowledge.json", "knowledge/directions_world.json", "knowledge/scale.json", "knowledge/metrics.json"})
+    CHECK_MESSAGE(fs::exists(work / f), f);
+  // --scene-scale overrides the scene's unit; annotate prints the table; an edited file feeds back.
+  const std::string annotate = "annotate --scene " + scene.string() + " --out " + work.string() + tiny + body;
+  const Result scaled = run(annotate + " --set knowledge.preset=cat --scene-scale 50");
+  INFO(scaled.output);
+  REQUIRE(scaled.code == 0);
+  CHECK(scaled.output.find("scale: 50 cm per scene unit (from --scene-scale)") != std::string::npos);
+  CHECK(scaled.output.find("inner_earcanal") != std::string::npos);
+  const fs::path edited = root / "my_knowledge.json";
+  {
+    std::ifstream in(work / "knowledge" / "knowledge.json");
+    nf::json k = nf::json::parse(in);
+    k["regions"]["tail"]["length_cm"] = 7.5;
+    std::ofstream(edited) << k.dump(2);
+  }
+  const Result fed = run(annotate + " --set knowledge.file=" + edited.string() + " --json");
+  REQUIRE(fed.code == 0);
+  const nf::json fed_json = nf::json::parse(fed.output.substr(fed.output.find('{')));
+  CHECK(fed_json["knowledge"]["regions"]["tail"]["length_cm"].get<double>() == doctest::Approx(7.5));
+  CHECK(fed_json["knowledge"]["source"] == "file");
+  const Result two = run(annotate + " --set knowledge.preset=cat --set knowledge.file=" + edited.string());
+  CHECK(two.code == 2);
+  CHECK(two.output.find("give one") != std::string::npos);
+  const Result no_model = run(annotate + " --set knowledge.vlm=http://127.0.0.1:9");
+  CHECK(no_model.code == 2);
+  CHECK(no_model.output.find("knowledge.model") != std::string::npos);
 
   CHECK(run("reconstruct --scene " + scene.string() + " --out " + (scene / "work").string() + tiny).code == 2);
   CHECK(run("reconstruct --scene " + scene.string() + " --out " + work.string() + " --set nues.steps=3").code == 2);
@@ -365,7 +414,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   CHECK(late.code == 2);
   CHECK_FALSE(fs::exists(fresh));
   std::ofstream(root / "a_file") << "x";
-  const Result file = run("reconstruct --scene " + scene.string() + " --out " + (root / "a_file").string());
+  const Result file = run("reconstruct --scene " + scene.string() + " --out " + (root / "a_file").string() + " --to neus");
   CHECK(file.code == 1);
   CHECK(file.output.find("is an existing file") != std::string::npos);
   CHECK(file.output.find("internal error") == std::string::npos);
@@ -381,7 +430,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   // The README's tables are the ones the declarations make (regenerate them with --markdown).
   std::ifstream readme(NF_README);
   const std::string manual(std::istreambuf_iterator<char>(readme), {});
-  for (const std::string stage : {"neus", "body"}) {
+  for (const std::string stage : {"neus", "body", "knowledge"}) {
     const Result table = run("reconstruct --help-stage " + stage + " --markdown");
     CHECK_MESSAGE(manual.find("### `" + stage + "`\n\n" + table.output) != std::string::npos,
                   "README.md's " << stage << " settings table is stale: paste `nf_gpu reconstruct --help-stage " << stage
@@ -400,7 +449,7 @@ TEST_CASE("Ctrl-C during training saves a checkpoint, says how to resume and exi
   const std::string args = "reconstruct --scene " + scene.string() + " --out " + work.string() +
                            " --quality draft --set neus.steps=100000 --set neus.rays=64 --set neus.samples_per_ray=8"
                            " --set neus.fine_samples=4 --set neus.mesh_resolution=32 --set neus.hull_resolution=32"
-                           " --set neus.checkpoint_interval=0";
+                           " --set neus.checkpoint_interval=0 --to neus";
   pid_t pid = spawn(args, log);
   REQUIRE(wait_for(log, "training views", 120));
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));

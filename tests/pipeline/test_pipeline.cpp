@@ -231,7 +231,7 @@ TEST_CASE("settings: one declaration parses, checks and describes every --set") 
   const std::string table = pipeline::describe_settings(s, false);
   CHECK(table.find("repeat") != std::string::npos);
   CHECK(table.find("[1, 10]") != std::string::npos);
-  CHECK(table.find("upper | lower") != std::string::npos);
+  CHECK(table.find("upper, lower") != std::string::npos);
   const std::string markdown = pipeline::describe_settings(s, true);
   CHECK(markdown.find("| `repeat` | integer | [1, 10] | 1 | copies of the text |") != std::string::npos);
 }
@@ -257,7 +257,15 @@ TEST_CASE("reconstruct checks every option before it touches a file") {
   write(root / "a_file", "x");
   CHECK_THROWS_WITH_AS(pipeline::check_reconstruct_options(stages, {o.scene, root / "a_file", "draft", {}, o.settings}),
                        doctest::Contains("is an existing file"), InputError);
+  // A run that needs the knowledge stage must name its source; one that stops before it need not.
+  CHECK_THROWS_WITH_AS(pipeline::check_reconstruct_options(stages, o), doctest::Contains("knowledge.preset=NAME"), UsageError);
+  o.run.to = "body";
+  CHECK_NOTHROW(pipeline::check_reconstruct_options(stages, o));
+  o.run.to.clear();
+  o.settings.push_back("knowledge.preset=cat");
   CHECK(pipeline::check_reconstruct_options(stages, o)["neus"]["steps"] == "10");  // as typed; the schema reads it
+  o.settings.push_back("knowledge.file=" + (root / "a_file").string());
+  CHECK_THROWS_WITH_AS(pipeline::check_reconstruct_options(stages, o), doctest::Contains("give one"), UsageError);
   CHECK(stages.front()->settings().values("draft", {{"steps", "10"}})["steps"] == 10);
   CHECK_THROWS_WITH_AS(stages.front()->settings().values("draft", {{"steps", "10x"}}), doctest::Contains("got \"10x\""),
                        UsageError);
