@@ -26,6 +26,19 @@ json parse_json(std::string_view text, const std::string& source) {
   }
 }
 
+std::optional<json> parse_json_bounded(std::string_view text, int max_depth) {
+  struct TooDeep {};
+  try {
+    return json::parse(text, [max_depth](int depth, json::parse_event_t, json&) {
+      if (depth > max_depth) throw TooDeep{};
+      return true;
+    });
+  } catch (const json::exception&) {
+  } catch (const TooDeep&) {
+  }
+  return std::nullopt;
+}
+
 json read_json_file(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path.string() + ": cannot open");

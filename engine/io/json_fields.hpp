@@ -13,6 +13,9 @@ namespace nf::io {
 
 // Parses `text`; a syntax error becomes InputError "<source>: not valid JSON (line 1, column 9: ...)".
 json parse_json(std::string_view text, const std::string& source);
+// Untrusted text (a server's answer): nullopt when it is not JSON or nests deeper than `max_depth`
+// (copying or printing a deeper value would recurse that deep).
+std::optional<json> parse_json_bounded(std::string_view text, int max_depth);
 // The whole file, parsed as above; InputError "<file>: cannot open" when it cannot be read.
 json read_json_file(const std::filesystem::path& path);
 

@@ -47,7 +47,10 @@ Scene read_transforms_json(const std::filesystem::path& file) {
     throw InputError(source + ": field 'frames' is missing");
   Scene scene;
   scene.root = file.parent_path();
-  if (const auto cm = top.find("cm_per_unit")) scene.cm_per_unit = cm->number();
+  if (const auto cm = top.find("cm_per_unit")) {
+    scene.cm_per_unit = cm->number();
+    if (!(std::isfinite(*scene.cm_per_unit) && *scene.cm_per_unit > 0)) cm->fail("expected a positive number of cm per unit");
+  }
   const JsonField frames = top.at("frames");
   for (std::size_t index = 0; index < frames.size(); ++index) {
     const JsonField f = frames.at(index);

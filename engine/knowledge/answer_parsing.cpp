@@ -9,6 +9,7 @@
 
 #include "engine/core/error.hpp"
 #include "engine/core/text.hpp"
+#include "engine/io/json_fields.hpp"
 
 namespace nf::knowledge {
 using body::Region;
@@ -19,13 +20,19 @@ std::string lower(std::string s) {
   return s;
 }
 
-// A value from an answer, quoted in an error message: short and printable.
+// Answers nest no deeper than this (a dict of lists or of per-region dicts); deeper ones are refused
+// before anything copies or prints them.
+constexpr int kMaxAnswerDepth = 16;
+
+// A value from an answer, quoted in an error message: short, printable, whole UTF-8 characters.
 std::string quoted(const json& value) {
-  std::string s = value.is_string() ? value.get<std::string>() : value.dump();
-  for (char& c : s)
-    if (std::iscntrl(static_cast<unsigned char>(c))) c = ' ';
-  if (s.size() > 40) s = s.substr(0, 40) + "...";
-  return "'" + s + "'";
+  if (value.is_object()) return "'{...}'";
+  if (value.is_array()) {
+    bool flat = value.size() <= 8;
+    for (const json& v : value) flat = flat && v.is_primitive();
+    if (!flat) return "'[...]'";
+  }
+  return "'" + shorten(value.is_string() ? value.get<std::string>() : value.dump(), 40) + "'";
 }
 
 bool is_ident_start(char c) { return std::isalpha(static_cast<unsigned char>(c)) || c == '_'; }
@@ -104,11 +111,8 @@ std::string python_to_json(std::string_view s) {
 
 std::optional<json> parse_object(std::string_view text) {
   for (int pass = 0; pass < 2; ++pass) {
-    try {
-      json j = json::parse(pass == 0 ? std::string(text) : python_to_json(text));
-      if (j.is_object()) return j;
-    } catch (const json::exception&) {
-    }
+    std::optional<json> j = io::parse_json_bounded(pass == 0 ? std::string(text) : python_to_json(text), kMaxAnswerDepth);
+    if (j && j->is_object()) return j;
   }
   return std::nullopt;
 }
@@ -147,7 +151,9 @@ std::string normalised(const std::string& name) {
   while (start <= out.size()) {
     const std::size_t end = std::min(out.find('_', start), out.size());
     const std::string word = out.substr(start, end - start);
-    static const char* kNoise[] = {"fur", "hair", "length", "lengths", "cm", "thickness", "region", "area", "part", "the", "of", "coat"};
+    static const char* kNoise[] = {"fur", "hair", "length", "lengths", "cm", "mm", "thickness", "thick", "effective",
+                                   "direction", "directions", "vector", "growth", "growing", "estimate", "estimated",
+                                   "value", "region", "area", "part", "the", "of", "coat"};
     if (!word.empty() && std::find_if(std::begin(kNoise), std::end(kNoise), [&](const char* n) { return word == n; }) == std::end(kNoise))
       kept += (kept.empty() ? "" : "_") + word;
     start = end + 1;
@@ -281,56 +287,78 @@ bool key_has_any(const std::string& key, const std::vector<std::string>& hints) 
   return std::any_of(hints.begin(), hints.end(), [&](const std::string& h) { return k.find(h) != std::string::npos; });
 }
 
-// The object that holds the per-region entries: `object` itself when a key names a region, else
-// the entry whose key matches a hint ({"lengths": {...}}), else its only object-valued entry.
-const json& region_table(const json& object, const std::vector<std::string>& hints, const std::string& where) {
+std::size_t region_keys(const json& object) {
+  std::size_t n = 0;
+  for (const auto& [key, value] : object.items()) n += match_region(key).has_value() ? 1 : 0;
+  return n;
+}
+
+// The objects that hold the per-region entries, the main one first: `object` itself when its keys
+// name regions, unless an entry named like the wanted field ({"lengths": {...}}) names more (then
+// that one, with the top level's region keys as a supplement: {"lengths": {...}, "mane": {...}});
+// else that entry or the only object-valued one not named for another field, one level down.
+std::vector<const json*> region_tables(const json& object, const std::vector<std::string>& hints,
+                                       const std::vector<std::string>& exclude, const std::string& where) {
   if (!object.is_object()) throw InputError(where + ": expected an object of regions, got " + quoted(object));
   const json* current = &object;
   for (int depth = 0; depth < 3; ++depth) {
-    bool names_region = false;
-    for (const auto& [key, value] : current->items()) names_region |= match_region(key).has_value();
-    if (names_region) return *current;
-    // Descend into the entry named like the wanted field, else into the only object entry.
-    const json* next = nullptr;
+    const json* hinted = nullptr;
+    const json* only = nullptr;
     int objects = 0;
     for (const auto& [key, value] : current->items()) {
-      if (!value.is_object()) continue;
-      ++objects;
-      if (key_has_any(key, hints)) next = &value;
+      if (!value.is_object() || key_has_any(key, exclude)) continue;  // {"thickness": {...}} is not a table of lengths
+      ++objects, only = &value;
+      if (key_has_any(key, hints) && !match_region(key)) hinted = &value;
     }
-    if (!next && objects == 1)
-      for (const auto& [key, value] : current->items())
-        if (value.is_object()) next = &value;
+    const std::size_t here = region_keys(*current);
+    if (hinted && region_keys(*hinted) > here) return here ? std::vector<const json*>{hinted, current} : std::vector<const json*>{hinted};
+    if (here) return {current};
+    const json* next = hinted ? hinted : objects == 1 ? only : nullptr;
     if (!next) break;
     current = next;
   }
   throw InputError(where + ": the answer names no body region (expected keys such as 'body', 'tail', 'ears')");
 }
 
+// A value that says "not given": null, "N/A", "none", "unknown", "-".
+bool absent(const json& v) {
+  if (v.is_null()) return true;
+  if (!v.is_string()) return false;
+  const std::string s = lower(v.get<std::string>());
+  return s.empty() || s == "n/a" || s == "na" || s == "none" || s == "unknown" || s == "-" || s == "not visible";
+}
+
 template <class T, class Convert>
-RegionValues<T> per_region(const json& object, const std::vector<std::string>& hints, const std::string& field,
-                           const std::string& where, Convert convert) {
+RegionValues<T> per_region(const json& object, const std::vector<std::string>& hints, const std::vector<std::string>& exclude,
+                           const std::string& field, const std::string& where, Convert convert) {
   RegionValues<T> out;
-  const json& table = region_table(object, hints, where);
-  for (const auto& [key, value] : table.items()) {
-    const std::optional<Region> region = match_region(key);
-    if (!region) {
-      out.unknown.push_back(key);
-      continue;
+  const std::vector<const json*> tables = region_tables(object, hints, exclude, where);
+  for (std::size_t t = 0; t < tables.size(); ++t)
+    for (const auto& [key, value] : tables[t]->items()) {
+      // "mane_thickness" in a table of lengths is the other field, not the mane's length.
+      if (key_has_any(key, exclude)) continue;
+      const std::optional<Region> region = match_region(key);
+      if (!region) {
+        if (t == 0) out.unknown.push_back(shorten(key, 40));
+        continue;
+      }
+      const bool seen = std::any_of(out.values.begin(), out.values.end(), [&](const auto& e) { return e.first == *region; });
+      if (t > 0 && seen) continue;  // the main table wins
+      const std::string name(body::kRegionNames[std::size_t(*region)]);
+      const std::string at = where + ": regions." + name + "." + field + (normalised(key) == name ? "" : " (the answer's '" + shorten(key, 40) + "')");
+      const json* v = &value;
+      if (value.is_object() && !(value.contains("x") && value.contains("y") && value.contains("z"))) {
+        v = nullptr;
+        for (const auto& [k, inner] : value.items())
+          if (key_has_any(k, hints) && !key_has_any(k, exclude)) v = &inner;
+        if (!v) throw InputError(at + ": the entry " + quoted(value) + " has no field like '" + hints.front() + "'");
+      }
+      if (absent(*v)) continue;  // not given: the fill rules decide
+      const T converted = convert(*v, at);
+      const auto same = std::find_if(out.values.begin(), out.values.end(), [&](const auto& e) { return e.first == *region; });
+      if (same != out.values.end()) same->second = converted;
+      else out.values.emplace_back(*region, converted);
     }
-    const std::string at = where + ": regions." + std::string(body::kRegionNames[std::size_t(*region)]) + "." + field;
-    const json* v = &value;
-    if (value.is_object() && !(value.contains("x") && value.contains("y") && value.contains("z"))) {
-      v = nullptr;
-      for (const auto& [k, inner] : value.items())
-        if (key_has_any(k, hints)) v = &inner;
-      if (!v) throw InputError(at + ": the entry " + quoted(value) + " has no field like '" + hints.front() + "'");
-    }
-    const T converted = convert(*v, at);
-    const auto same = std::find_if(out.values.begin(), out.values.end(), [&](const auto& e) { return e.first == *region; });
-    if (same != out.values.end()) same->second = converted;
-    else out.values.emplace_back(*region, converted);
-  }
   return out;
 }
 
@@ -357,26 +385,35 @@ std::vector<FoundObject> find_objects(const std::string& text) {
 }
 
 std::optional<Region> match_region(const std::string& name) {
+  if (name.size() > 40) return std::nullopt;  // no region name is that long; spares the edit distances
   const std::string n = normalised(name);
   if (n.empty()) return std::nullopt;
+  // Keys an answer uses for other things, which small misspellings would turn into regions.
+  static const char* kMeta[] = {"note", "notes", "comment", "comments", "confidence", "unit", "units", "name",
+                                "animal", "species", "explanation", "reasoning", "summary", "total", "average", "remarks"};
+  if (std::any_of(std::begin(kMeta), std::end(kMeta), [&](const char* m) { return n == m; })) return std::nullopt;
   const auto& aliases = region_aliases();
   if (const auto it = aliases.find(n); it != aliases.end()) return it->second;
-  // Without separators ("legfront", "innerearcanal"), then small misspellings of either.
+  // Without separators ("legfront", "innerearcanal"), then one misspelt letter (two in long names)
+  // of a name of five letters or more.
   const auto compact = [](std::string s) {
     s.erase(std::remove(s.begin(), s.end(), '_'), s.end());
     return s;
   };
-  std::vector<std::string> candidates;
-  for (const auto& [alias, region] : aliases) {
-    if (compact(alias) == compact(n)) return region;
-    candidates.push_back(compact(alias));
-  }
-  if (compact(n).size() < 4) return std::nullopt;  // too short to guess from
-  const std::string close = closest_match(compact(n), candidates);
-  if (close.empty()) return std::nullopt;
+  const std::string c = compact(n);
   for (const auto& [alias, region] : aliases)
-    if (compact(alias) == close) return region;
-  return std::nullopt;
+    if (compact(alias) == c) return region;
+  if (c.size() < 5) return std::nullopt;
+  const std::size_t allowed = c.size() <= 8 ? 1 : 2;
+  std::optional<Region> best;
+  std::size_t best_distance = allowed + 1;
+  for (const auto& [alias, region] : aliases) {
+    const std::string a = compact(alias);
+    if (a.size() < 5) continue;
+    const std::size_t d = edit_distance(c, a);
+    if (d < best_distance) best_distance = d, best = region;
+  }
+  return best;
 }
 
 double length_cm_of(const json& value, const std::string& where) {
@@ -424,13 +461,14 @@ glm::vec3 direction_of(const json& value, const std::string& where) {
   return glm::vec3(glm::normalize(d));
 }
 
-RegionValues<double> region_lengths(const json& object, const std::vector<std::string>& hints, const std::string& field,
-                                    const std::string& where) {
-  return per_region<double>(object, hints, field, where, [](const json& v, const std::string& at) { return length_cm_of(v, at); });
+RegionValues<double> region_lengths(const json& object, const std::vector<std::string>& hints,
+                                    const std::vector<std::string>& exclude, const std::string& field, const std::string& where) {
+  return per_region<double>(object, hints, exclude, field, where,
+                            [](const json& v, const std::string& at) { return length_cm_of(v, at); });
 }
 
 RegionValues<glm::vec3> region_directions(const json& object, const std::string& where) {
-  return per_region<glm::vec3>(object, {"direction", "dir", "vector", "growth"}, "direction", where,
+  return per_region<glm::vec3>(object, {"direction", "dir", "vector", "growth"}, {"length", "thick"}, "direction", where,
                                [](const json& v, const std::string& at) { return direction_of(v, at); });
 }
 
@@ -462,7 +500,7 @@ double eye_distance_cm_of(const std::string& text, const std::string& where) {
     std::size_t word_end = end;
     while (word_end < text.size() && std::isalpha(static_cast<unsigned char>(text[word_end]))) ++word_end;
     const std::string unit = lower(text.substr(end, word_end - end));
-    if (unit == "cm" || unit == "mm" || unit == "in" || unit.rfind("centimet", 0) == 0 || unit.rfind("millimet", 0) == 0 ||
+    if (unit == "cm" || unit == "mm" || unit.rfind("centimet", 0) == 0 || unit.rfind("millimet", 0) == 0 ||
         unit.rfind("inch", 0) == 0)
       if (const std::optional<double> cm = length_text_cm(text.substr(i, word_end - i))) return *cm;
   }

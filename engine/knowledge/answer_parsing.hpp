@@ -48,8 +48,10 @@ struct RegionValues {
 // "thick"): the function descends into the wrapping object whose key has one ({"lengths": {...}},
 // {"thickness": {...}}) or into a single wrapping object, and picks the matching field of
 // per-region objects ({"body": {"length": 2, "thickness": 1}}). Errors name "<where>: regions.R.<field>".
-RegionValues<double> region_lengths(const json& object, const std::vector<std::string>& hints, const std::string& field,
-                                    const std::string& where);
+// Keys with a word of `exclude` belong to another field ("mane_thickness" among lengths) and are
+// skipped; values that say "not given" (null, "N/A") are left out for the fill rules.
+RegionValues<double> region_lengths(const json& object, const std::vector<std::string>& hints,
+                                    const std::vector<std::string>& exclude, const std::string& field, const std::string& where);
 RegionValues<glm::vec3> region_directions(const json& object, const std::string& where);
 
 // The eye distance in cm from an answer: a JSON field whose name has "eye" or "distance" in it, else

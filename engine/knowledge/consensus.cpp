@@ -49,7 +49,8 @@ Consensus consensus(const std::vector<Knowledge>& samples) {
     const auto [lo, hi] = std::minmax_element(lengths.begin(), lengths.end());
     const auto [tlo, thi] = std::minmax_element(thickness.begin(), thickness.end());
     out.spread[name] = {{"length_cm", {*lo, *hi}}, {"thickness_cm", {*tlo, *thi}}, {"direction_agreement", agreement}};
-    if ((*lo > 0 && *hi > 2.0 * *lo) || (*lo == 0 && *hi > 0) || agreement < 0.5) out.flagged.push_back(name);
+    // Directions of bald regions are copies (fill rules) and do not count.
+    if ((*lo > 0 && *hi > 2.0 * *lo) || (*lo == 0 && *hi > 0) || (r.length_cm > 0 && agreement < 0.5)) out.flagged.push_back(name);
   }
   return out;
 }

@@ -1,8 +1,8 @@
 #pragma once
 // Consensus of several annotations of the same animal (`knowledge.samples=K`): per region the
 // median length and thickness and the normalised mean direction, with the spread of the answers;
-// a region whose lengths disagree by more than a factor of two (or bald in one answer and furred in
-// another) is flagged. A region (mane) is kept when more than half of the answers have it.
+// a region whose lengths disagree by more than a factor of two, that is bald in one answer and
+// furred in another, or (when furred) whose directions disagree (mean resultant below 0.5) is flagged. A region (mane) is kept when more than half of the answers have it.
 #include <string>
 #include <vector>
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 #include "engine/core/error.hpp"
 #include "engine/core/text.hpp"
@@ -22,86 +23,106 @@ std::string lower_copy(std::string s) {
 const std::vector<std::string> kLengthHints{"length", "long"};
 const std::vector<std::string> kThicknessHints{"thick", "subtract", "effective", "remov", "depth"};
 
+// A number as people write it: 75, 0.35, 1e+300.
+std::string num(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
+
 void check_lengths(const RegionValues<double>& v, const std::string& field, const std::string& where) {
   for (const auto& [region, cm] : v.values)
     if (!(cm >= 0 && cm <= kMaxLengthCm))
-      throw InputError(where + ": regions." + name_of(region) + "." + field + " = " + std::to_string(cm) +
-                       " is outside 0-" + std::to_string(int(kMaxLengthCm)) + " cm");
+      throw InputError(where + ": regions." + name_of(region) + "." + field + " = " + num(cm) + " is outside 0-" +
+                       num(kMaxLengthCm) + " cm");
 }
 
 void note_unknown(const std::vector<std::string>& unknown, const std::string& step, std::vector<std::string>& warnings) {
   if (!unknown.empty()) warnings.push_back("the " + step + " answer names parts that are no region, ignored: " + join(unknown));
 }
 
-// The first object of the answer that holds a table of regions for `hints`.
-RegionValues<double> lengths_in(const std::vector<FoundObject>& objects, const std::vector<std::string>& hints,
-                                const std::string& field, const std::string& where) {
-  if (objects.empty()) throw InputError(where + ": the answer holds no dict of parts");
-  std::optional<InputError> first_error;
-  for (const FoundObject& o : objects) {
-    try {
-      RegionValues<double> v = region_lengths(o.value, hints, field, where);
-      if (!v.values.empty()) {
-        check_lengths(v, field, where);
-        return v;
-      }
-    } catch (const InputError& e) {
-      if (!first_error) first_error = e;
-    }
-  }
-  throw first_error ? *first_error : InputError(where + ": the answer names no body region");
+// Which field the words before a dict announce: the one named last ("I checked the length and
+// thickness. Length: {...}" announces lengths). 'L', 'T' or 0.
+char announced(const std::string& label) {
+  std::size_t l = std::string::npos, t = std::string::npos;
+  for (const std::string& h : kLengthHints)
+    if (const std::size_t at = label.rfind(h); at != std::string::npos && (l == std::string::npos || at > l)) l = at;
+  for (const std::string& h : kThicknessHints)
+    if (const std::size_t at = label.rfind(h); at != std::string::npos && (t == std::string::npos || at > t)) t = at;
+  if (l == std::string::npos && t == std::string::npos) return 0;
+  if (t == std::string::npos) return 'L';
+  if (l == std::string::npos) return 'T';
+  return l > t ? 'L' : 'T';
 }
 
-bool label_has(const std::string& label, const std::vector<std::string>& hints) {
-  return std::any_of(hints.begin(), hints.end(), [&](const std::string& h) { return label.find(h) != std::string::npos; });
+// The table of `field` in one dict, or nullopt when the dict holds none; a dict that has one but
+// with a bad value is an error naming it.
+std::optional<RegionValues<double>> read_table(const json& o, char field, const std::string& where) {
+  const bool lengths = field == 'L';
+  try {
+    RegionValues<double> v = region_lengths(o, lengths ? kLengthHints : kThicknessHints, lengths ? kThicknessHints : kLengthHints,
+                                            lengths ? "length_cm" : "thickness_cm", where);
+    if (v.values.empty()) return std::nullopt;
+    check_lengths(v, lengths ? "length_cm" : "thickness_cm", where);
+    return v;
+  } catch (const InputError& e) {
+    if (std::string(e.what()).find("names no body region") != std::string::npos) return std::nullopt;
+    throw;
+  }
+}
+
+// The dict of the answer that holds `field`: the one announced for it, else the first not announced
+// for the other field, else the first that reads.
+RegionValues<double> table_in(const std::vector<FoundObject>& objects, char field, const std::string& where) {
+  if (objects.empty()) throw InputError(where + ": the answer holds no dict of parts");
+  const char other = field == 'L' ? 'T' : 'L';
+  for (int pass = 0; pass < 3; ++pass)
+    for (const FoundObject& o : objects) {
+      const char a = announced(o.label);
+      if ((pass == 0 && a != field) || (pass == 1 && a == other)) continue;
+      if (std::optional<RegionValues<double>> v = read_table(o.value, field, where)) return *v;
+    }
+  throw InputError(where + ": the answer names no body region");
+}
+
+bool has_wrapper(const json& o, const std::vector<std::string>& hints) {
+  for (const auto& [key, value] : o.items()) {
+    if (!value.is_object()) continue;
+    const std::string k = lower_copy(key);
+    if (std::any_of(hints.begin(), hints.end(), [&](const std::string& h) { return k.find(h) != std::string::npos; })) return true;
+  }
+  return false;
 }
 
 // The verification answer: {"length": {...}, "thickness": {...}}, per-region {"length", "thickness"}
-// objects, or two dicts in the text (labelled by the words before them, else length first).
-void read_verification(const std::string& text, PartialKnowledge& k, std::vector<std::string>& warnings, const std::string& where) {
+// pairs, or two dicts in the text (each the field the words before it name last, else in order:
+// lengths first). Returns false when it holds no dict at all.
+bool read_verification(const std::string& text, PartialKnowledge& k, std::vector<std::string>& warnings, const std::string& where) {
   const std::vector<FoundObject> objects = find_objects(text);
-  if (objects.empty()) throw InputError(where + ": the answer holds no dict of parts");
+  if (objects.empty()) return false;
   std::optional<RegionValues<double>> lengths, thickness;
-  const auto try_read = [&](const json& o, const std::vector<std::string>& hints, const std::string& field) -> std::optional<RegionValues<double>> {
-    try {
-      RegionValues<double> v = region_lengths(o, hints, field, where);
-      if (v.values.empty()) return std::nullopt;
-      check_lengths(v, field, where);
-      return v;
-    } catch (const InputError& e) {
-      // A dict that is there but wrong is an error; one that is not about this field is not.
-      if (std::string(e.what()).find("names no body region") != std::string::npos) return std::nullopt;
-      throw;
-    }
-  };
-  const auto has_key = [](const json& o, const std::vector<std::string>& hints) {
-    for (const auto& [key, value] : o.items())
-      if (value.is_object() && label_has(lower_copy(key), hints)) return true;
-    return false;
-  };
   for (const FoundObject& o : objects)
-    if (has_key(o.value, kLengthHints) || has_key(o.value, kThicknessHints)) {
-      if (has_key(o.value, kLengthHints)) lengths = try_read(o.value, kLengthHints, "length_cm");
-      if (has_key(o.value, kThicknessHints)) thickness = try_read(o.value, kThicknessHints, "thickness_cm");
+    if (has_wrapper(o.value, kLengthHints) || has_wrapper(o.value, kThicknessHints)) {  // one dict of two
+      lengths = read_table(o.value, 'L', where), thickness = read_table(o.value, 'T', where);
       break;
     }
-  if (!lengths && !thickness) {
-    std::vector<const FoundObject*> unlabelled;
+  if (!lengths && !thickness && objects.size() == 1) {  // one dict: per-region pairs carry both, else its label
+    lengths = read_table(objects[0].value, 'L', where);
+    thickness = read_table(objects[0].value, 'T', where);
+    if (lengths && thickness && lengths->values == thickness->values) {  // plain numbers: one field only
+      (announced(objects[0].label) == 'T' ? lengths : thickness).reset();
+    }
+  } else if (!lengths && !thickness) {
+    std::vector<const FoundObject*> unannounced;
     for (const FoundObject& o : objects) {
-      if (label_has(o.label, kThicknessHints) && !thickness) thickness = try_read(o.value, kThicknessHints, "thickness_cm");
-      else if (label_has(o.label, kLengthHints) && !lengths) lengths = try_read(o.value, kLengthHints, "length_cm");
-      else unlabelled.push_back(&o);
+      const char a = announced(o.label);
+      if (a == 'L' && !lengths) lengths = read_table(o.value, 'L', where);
+      else if (a == 'T' && !thickness) thickness = read_table(o.value, 'T', where);
+      else if (a == 0) unannounced.push_back(&o);
     }
-    for (const FoundObject* o : unlabelled) {  // per-region {"length", "thickness"}, or by order
-      if (!lengths) lengths = try_read(o->value, kLengthHints, "length_cm");
-      else if (!thickness) thickness = try_read(o->value, kThicknessHints, "thickness_cm");
-    }
-    if (objects.size() == 1 && lengths && !thickness) {
-      // One dict of per-region objects carries both fields.
-      try {
-        thickness = try_read(objects[0].value, kThicknessHints, "thickness_cm");
-      } catch (const InputError&) {
-      }
+    for (const FoundObject* o : unannounced) {
+      if (!lengths) lengths = read_table(o->value, 'L', where);
+      else if (!thickness) thickness = read_table(o->value, 'T', where);
     }
   }
   if (!lengths && !thickness) throw InputError(where + ": the answer holds no dict of lengths or thicknesses");
@@ -111,6 +132,7 @@ void read_verification(const std::string& text, PartialKnowledge& k, std::vector
   }
   if (thickness)
     for (const auto& [r, cm] : thickness->values) k.thickness[std::size_t(r)] = cm;
+  return true;
 }
 
 }  // namespace
@@ -138,15 +160,22 @@ Annotation annotate_with_vlm(const ChatFunction& chat, const AnnotationImages& i
       try {
         if (answer.find_first_not_of(" \t\r\n") == std::string::npos) throw InputError(at + ": the answer is empty");
         if (prompt.step == "length") {
-          const RegionValues<double> v = lengths_in(find_objects(answer), kLengthHints, "length_cm", at);
+          const RegionValues<double> v = table_in(find_objects(answer), 'L', at);
+          if (std::none_of(v.values.begin(), v.values.end(), [](const auto& e) { return e.first == Region::body; }))
+            throw InputError(at + ": no length for 'body', the region every other one falls back on");
           note_unknown(v.unknown, "length", out.warnings);
           for (const auto& [r, cm] : v.values) k.length[std::size_t(r)] = cm;
         } else if (prompt.step == "thickness") {
-          const RegionValues<double> v = lengths_in(find_objects(answer), kThicknessHints, "thickness_cm", at);
+          const RegionValues<double> v = table_in(find_objects(answer), 'T', at);
           note_unknown(v.unknown, "thickness", out.warnings);
           for (const auto& [r, cm] : v.values) k.thickness[std::size_t(r)] = cm;
         } else if (prompt.step == "verify") {
-          read_verification(answer, k, out.warnings, at);
+          // This step only corrects: an answer without any dict ("yes, they are right") after the
+          // retry keeps the earlier values.
+          if (!read_verification(answer, k, out.warnings, at)) {
+            if (attempt == 0) throw InputError(at + ": the answer holds no dict of parts");
+            out.warnings.push_back("the verify answer gave no values; the earlier ones stand");
+          }
         } else if (prompt.step == "direction") {
           const std::vector<FoundObject> objects = find_objects(answer);
           if (objects.empty()) throw InputError(at + ": the answer holds no dict of parts");
@@ -165,14 +194,14 @@ Annotation annotate_with_vlm(const ChatFunction& chat, const AnnotationImages& i
         } else {
           const double cm = eye_distance_cm_of(answer, at);
           if (!(cm >= kMinEyeCm && cm <= kMaxEyeCm))
-            throw InputError(at + ": eye_distance_cm = " + std::to_string(cm) + " is outside " + std::to_string(kMinEyeCm).substr(0, 3) +
-                             "-" + std::to_string(int(kMaxEyeCm)) + " cm");
+            throw InputError(at + ": eye_distance_cm = " + num(cm) + " is outside " + num(kMinEyeCm) + "-" + num(kMaxEyeCm) + " cm");
           eye_cm = cm;
         }
         break;
       } catch (const InputError& e) {
         if (attempt > 0) throw;
-        const std::string problem = std::string(e.what()).substr(at.size() + 2);
+        const std::string message = e.what();
+        const std::string problem = message.rfind(at + ": ", 0) == 0 ? message.substr(at.size() + 2) : message;
         out.warnings.push_back("the " + prompt.step + " answer was asked again: " + problem);
         messages.push_back({{"role", "user"}, {"content", repair_prompt(problem, prompt)}});
       }
@@ -244,8 +273,8 @@ Knowledge fill_missing_regions(const PartialKnowledge& a, std::vector<std::strin
       no_thickness.push_back(name);
     }
     if (e.thickness_cm > e.length_cm) {
-      warnings.push_back("regions." + name + ".thickness_cm " + std::to_string(e.thickness_cm) + " exceeds its length " +
-                         std::to_string(e.length_cm) + " cm: set to the length");
+      warnings.push_back("regions." + name + ".thickness_cm " + num(e.thickness_cm) + " exceeds its length " +
+                         num(e.length_cm) + " cm: set to the length");
       e.thickness_cm = e.length_cm;
     }
     if (a.direction[idx(r)]) {

@@ -38,8 +38,9 @@ Annotation annotate_with_vlm(const ChatFunction& chat, const AnnotationImages& i
 // The regions an annotation lacks, filled from a related region (README, *Knowledge*): the inner
 // ear canal from the ears (as the prompt says), paws and front paws from each other, each leg from
 // the other, under_tail from tail, face from neck, every other furred region from body; eyes,
-// nose tip and paw pads bald. A missing thickness is 0.35 x length (as the presets), a missing
-// direction the filled region's. mane stays absent unless answered. Each fill is one warning.
+// nose tip and paw pads bald. A missing thickness is that of the region the length came from,
+// else 0.35 x length (as the presets); a missing direction comes along the same chain of regions.
+// mane stays absent unless answered. Each fill is one warning.
 // Throws InputError when `body` itself has no length.
 struct PartialKnowledge {
   std::array<std::optional<double>, body::kRegionCount> length, thickness;

@@ -6,11 +6,14 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <thread>
 
 #include "engine/core/error.hpp"
 #include "engine/core/interrupt.hpp"
 #include "engine/core/log.hpp"
+#include "engine/core/text.hpp"
+#include "engine/io/json_fields.hpp"
 
 namespace nf::knowledge {
 namespace {
@@ -58,25 +61,26 @@ std::size_t on_header(char* data, std::size_t size, std::size_t count, void* use
 
 int on_progress(void*, curl_off_t, curl_off_t, curl_off_t, curl_off_t) { return interrupted() ? 1 : 0; }
 
-// The server's own explanation, from an OpenAI-style {"error": {"message": ...}} or the raw text,
-// shortened and stripped of control characters.
-std::string server_message(const std::string& body, const std::string& api_key) {
-  std::string text = body;
-  try {
-    const json j = json::parse(body);
-    if (j.contains("error")) {
-      const json& e = j["error"];
-      text = e.is_object() && e.contains("message") && e["message"].is_string() ? e["message"].get<std::string>()
-             : e.is_string()                                                      ? e.get<std::string>()
-                                                                                  : e.dump();
-    }
-  } catch (const json::exception&) {
-  }
-  for (char& ch : text)
-    if (std::iscntrl(static_cast<unsigned char>(ch))) ch = ' ';
+// Server answers nest no deeper than this; a deeper one is refused before anything copies it.
+constexpr int kMaxReplyDepth = 32;
+
+std::string masked(std::string text, const std::string& api_key) {
   if (api_key.size() >= 4)  // a server that echoes the key must not put it into our messages
     for (std::size_t at; (at = text.find(api_key)) != std::string::npos;) text.replace(at, api_key.size(), "***");
-  if (text.size() > 300) text = text.substr(0, 300) + "...";
+  return text;
+}
+
+// The server's own explanation, from an OpenAI-style {"error": {"message": ...}} or the raw text:
+// the key masked first, then shortened at a character boundary.
+std::string server_message(const std::string& body, const std::string& api_key) {
+  std::string text = body;
+  if (const std::optional<json> j = io::parse_json_bounded(body, kMaxReplyDepth); j && j->is_object() && j->contains("error")) {
+    const json& e = (*j)["error"];
+    text = e.is_object() && e.contains("message") && e["message"].is_string() ? e["message"].get<std::string>()
+           : e.is_string()                                                      ? e.get<std::string>()
+                                                                                : std::string("(an error without a message)");
+  }
+  text = shorten(masked(text, api_key), 300);
   return text.empty() ? "(no message)" : text;
 }
 
@@ -88,22 +92,21 @@ void sleep_interruptible(double seconds) {
   }
 }
 
-ChatReply parse_reply(const std::string& body, const std::string& where) {
-  json j;
-  try {
-    j = json::parse(body);
-  } catch (const json::exception&) {
-    throw InputError(where + ": the answer is not JSON, so this is not an OpenAI-compatible chat-completions endpoint "
-                             "(the answer begins: '" + server_message(body.substr(0, 120), "") + "')");
-  }
+ChatReply parse_reply(const std::string& body, const std::string& where, const std::string& api_key) {
+  const std::optional<json> parsed = io::parse_json_bounded(body, kMaxReplyDepth);
+  if (!parsed)
+    throw InputError(where + ": the answer is not JSON (or nests deeper than " + std::to_string(kMaxReplyDepth) +
+                     " levels), so this is not an OpenAI-compatible chat-completions endpoint (the answer begins: '" +
+                     shorten(server_message(body, api_key), 120) + "')");
+  const json& j = *parsed;
   if (!j.is_object() || !j.contains("choices") || !j["choices"].is_array() || j["choices"].empty())
-    throw InputError(where + ": the answer has no 'choices' (not an OpenAI chat-completions answer): " + server_message(body, ""));
+    throw InputError(where + ": the answer has no 'choices' (not an OpenAI chat-completions answer): " +
+                     server_message(body, api_key));
   const json& choice = j["choices"][0];
-  const json message = choice.is_object() ? choice.value("message", json()) : json();
-  if (!message.is_object() || !message.contains("content"))
+  if (!choice.is_object() || !choice.contains("message") || !choice["message"].is_object() || !choice["message"].contains("content"))
     throw InputError(where + ": the answer's choices[0] has no message.content");
   ChatReply reply;
-  const json& content = message["content"];
+  const json& content = choice["message"]["content"];
   if (content.is_string()) {
     reply.content = content.get<std::string>();
   } else if (content.is_array()) {  // content parts
@@ -114,8 +117,13 @@ ChatReply parse_reply(const std::string& body, const std::string& where) {
     throw InputError(where + ": message.content is neither text nor a list of parts");
   }
   if (choice.contains("finish_reason") && choice["finish_reason"].is_string())
-    reply.finish_reason = choice["finish_reason"].get<std::string>();
-  if (j.contains("usage")) reply.usage = j["usage"];
+    reply.finish_reason = shorten(choice["finish_reason"].get<std::string>(), 40);
+  // Token counts only: a flat object of numbers.
+  if (j.contains("usage") && j["usage"].is_object()) {
+    reply.usage = json::object();
+    for (const auto& [key, value] : j["usage"].items())
+      if (value.is_number() && key.size() < 64) reply.usage[key] = value;
+  }
   return reply;
 }
 
@@ -153,7 +161,11 @@ ChatReply chat_completion(const VlmEndpoint& e, const json& messages) {
   init_curl_once();
   const std::string url = chat_completions_url(e.url);
   const std::string where = "VLM endpoint " + redacted_url(url) + " (model '" + e.model + "')";
-  const std::string request = chat_request_body(e, messages).dump();
+  // Invalid UTF-8 cannot come from our own messages; replace rather than fail if it ever does.
+  const std::string request = chat_request_body(e, messages).dump(-1, ' ', false, json::error_handler_t::replace);
+  for (const char c : e.api_key)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+      throw InputError("NF_VLM_API_KEY holds a control character (a line break pasted with it?)");
 
   std::unique_ptr<CURL, decltype(&curl_easy_cleanup)> curl(curl_easy_init(), curl_easy_cleanup);
   if (!curl) throw InternalError("curl_easy_init failed");
@@ -205,7 +217,7 @@ ChatReply chat_completion(const VlmEndpoint& e, const json& messages) {
         failure = "no complete answer within " + std::to_string(int(std::lround(e.timeout_s))) + " s (knowledge.timeout_s)";
       if (code == CURLE_COULDNT_CONNECT) failure += " (is the server running? Ollama: `ollama serve`)";
     } else if (status == 200) {
-      ChatReply reply = parse_reply(t.body, where);
+      ChatReply reply = parse_reply(t.body, where, e.api_key);
       reply.attempts = attempt + 1;
       reply.request_bytes = request.size();
       reply.answer_bytes = t.body.size();

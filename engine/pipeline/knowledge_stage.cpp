@@ -67,7 +67,8 @@ class VlmSession {
   std::string chat(const json& messages, const std::string& step) {
     const std::string url = knowledge::redacted_url(knowledge::chat_completions_url(endpoint_.url));
     const std::string key = hash_bytes(json{{"url", url}, {"model", endpoint_.model}, {"temperature", endpoint_.temperature},
-                                            {"sample", sample_}, {"messages", messages}}.dump());
+                                            {"sample", sample_}, {"messages", messages}}
+                                           .dump(-1, ' ', false, json::error_handler_t::replace));
     const fs::path cached = cache_ / (key + ".json");
     json line{{"sample", sample_}, {"step", step}, {"url", url}, {"model", endpoint_.model}, {"messages", readable(messages)}};
     const auto start = std::chrono::steady_clock::now();
@@ -84,7 +85,14 @@ class VlmSession {
     }
     if (!hit) {
       log::info("knowledge: asking ", endpoint_.model, " (", step, ", sample ", sample_ + 1, ")");
-      reply = knowledge::chat_completion(endpoint_, messages);
+      try {
+        reply = knowledge::chat_completion(endpoint_, messages);
+      } catch (const Error& e) {  // the failed request is part of the record too
+        line["error"] = e.what();
+        transcript_ << masked(line.dump(-1, ' ', false, json::error_handler_t::replace)) << "\n" << std::flush;
+        throw;
+      }
+      reply.content = masked(reply.content);
       write_file_atomic(cached, json{{"answer", reply.content}, {"finish_reason", reply.finish_reason}}.dump() + "\n");
       written_.push_back(cached);
       ++sent, request_bytes += reply.request_bytes, answer_bytes += reply.answer_bytes, attempts += reply.attempts;
@@ -99,7 +107,7 @@ class VlmSession {
     if (!hit) line["usage"] = reply.usage, line["attempts"] = reply.attempts, line["request_bytes"] = reply.request_bytes,
               line["answer_bytes"] = reply.answer_bytes;
     line["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    transcript_ << masked(line.dump()) << "\n" << std::flush;
+    transcript_ << masked(line.dump(-1, ' ', false, json::error_handler_t::replace)) << "\n" << std::flush;
     return reply.content;
   }
 
@@ -141,7 +149,12 @@ json annotate_with_vlm(const StageContext& c, const KnowledgeSettings& s, const 
                        const glm::dmat4& animal_to_world, knowledge::Knowledge& result, std::vector<std::string>& warnings) {
   knowledge::VlmEndpoint endpoint;
   endpoint.url = s.vlm, endpoint.model = s.model;
-  if (const char* key = std::getenv(kVlmKeyVariable)) endpoint.api_key = key;
+  if (const char* key = std::getenv(kVlmKeyVariable)) {  // without the spaces or line break a paste brings
+    std::string k = key;
+    k.erase(0, k.find_first_not_of(" \t\r\n"));
+    k.erase(k.find_last_not_of(" \t\r\n") + 1);
+    endpoint.api_key = k;
+  }
   if (endpoint.api_key.empty()) log::info("knowledge: ", kVlmKeyVariable, " is not set: no API key is sent (fine for a local server)");
   endpoint.timeout_s = s.timeout_s, endpoint.retries = s.retries, endpoint.retry_wait_s = s.retry_wait_s;
   endpoint.max_answer_bytes = std::size_t(s.max_answer_mb * 1024.0 * 1024.0);
@@ -195,8 +208,8 @@ json annotate_with_vlm(const StageContext& c, const KnowledgeSettings& s, const 
     result = std::move(agreed.knowledge);
     write_file_atomic(out.consensus(), json{{"samples", samples.size()}, {"spread", agreed.spread}, {"flagged", agreed.flagged}}.dump(2) + "\n");
     if (!agreed.flagged.empty())
-      warnings.push_back("the " + std::to_string(samples.size()) + " answers disagree by more than a factor of two on " +
-                         join(agreed.flagged) + " (consensus.json has the spread)");
+      warnings.push_back("the " + std::to_string(samples.size()) + " answers disagree (lengths by more than a factor of two, "
+                         "bald against furred, or directions) on " + join(agreed.flagged) + " (consensus.json has the spread)");
     summary["flagged"] = agreed.flagged;
   } else {
     result = std::move(samples[0]);
@@ -255,8 +268,12 @@ std::vector<fs::path> KnowledgeStage::inputs(const StageContext& c) const {
 json KnowledgeStage::parameters(const StageContext& c) const {
   std::string prompts = knowledge::system_prompt();
   for (const knowledge::Prompt& p : knowledge::paper_prompts()) prompts += p.message();
+  json settings = knowledge_settings().values(c.quality, c.settings.value("knowledge", json::object()));
+  // The stage key is written to disk: a user name, password or key inside the URL stays out of it.
+  const std::string vlm = settings.value("vlm", std::string());
+  if (!vlm.empty()) settings["vlm"] = knowledge::redacted_url(vlm) + " #" + hash_bytes(vlm);
   return {{"stage_version", kStageVersion},
-          {"settings", knowledge_settings().values(c.quality, c.settings.value("knowledge", json::object()))},
+          {"settings", settings},
           {"prompts", hash_bytes(prompts)},
           {"scene_cm_per_unit", c.scene.cm_per_unit ? json(*c.scene.cm_per_unit) : json()}};
 }

@@ -87,7 +87,7 @@ TEST_CASE("directions: lists, objects, tuples in text, axis words; zero and junk
 
 TEST_CASE("per-region tables: wrapped, nested, unknown names") {
   const json wrapped = json::parse(R"({"lengths": {"Body": 2, "front legs": "1.5 cm", "whiskers": 5}})");
-  const auto v = region_lengths(wrapped, {"length"}, "length_cm", "answer");
+  const auto v = region_lengths(wrapped, {"length"}, {"thick"}, "length_cm", "answer");
   REQUIRE(v.values.size() == 2);  // in key order
   CHECK(v.values[0].first == Region::body);
   CHECK(v.values[1].first == Region::leg_front);
@@ -96,13 +96,13 @@ TEST_CASE("per-region tables: wrapped, nested, unknown names") {
   CHECK(v.unknown[0] == "whiskers");
 
   const json nested = json::parse(R"({"body": {"length": 2, "thickness": 0.7}, "tail": {"length": 3, "thickness": 1}})");
-  CHECK(region_lengths(nested, {"thick"}, "thickness_cm", "a").values[1].second == doctest::Approx(1.0));
+  CHECK(region_lengths(nested, {"thick"}, {"length"}, "thickness_cm", "a").values[1].second == doctest::Approx(1.0));
   const json both = json::parse(R"({"length": {"body": 2}, "thickness": {"body": 0.5}})");
-  CHECK(region_lengths(both, {"thick"}, "thickness_cm", "a").values[0].second == doctest::Approx(0.5));
-  CHECK(region_lengths(both, {"length"}, "length_cm", "a").values[0].second == doctest::Approx(2.0));
-  CHECK_THROWS_WITH_AS(region_lengths(json::parse(R"({"body": "lots"})"), {"length"}, "length_cm", "the answer"),
+  CHECK(region_lengths(both, {"thick"}, {"length"}, "thickness_cm", "a").values[0].second == doctest::Approx(0.5));
+  CHECK(region_lengths(both, {"length"}, {"thick"}, "length_cm", "a").values[0].second == doctest::Approx(2.0));
+  CHECK_THROWS_WITH_AS(region_lengths(json::parse(R"({"body": "lots"})"), {"length"}, {}, "length_cm", "the answer"),
                        doctest::Contains("the answer: regions.body.length_cm"), InputError);
-  CHECK_THROWS_WITH_AS(region_lengths(json::parse(R"({"colour": "brown"})"), {"length"}, "length_cm", "the answer"),
+  CHECK_THROWS_WITH_AS(region_lengths(json::parse(R"({"colour": "brown"})"), {"length"}, {}, "length_cm", "the answer"),
                        doctest::Contains("names no body region"), InputError);
   const auto dirs = region_directions(json::parse(R"({"directions": {"tail": [0, 0, -1], "ears": "up"}})"), "a");
   REQUIRE(dirs.values.size() == 2);  // in key order: ears, tail
@@ -116,4 +116,38 @@ TEST_CASE("the eye distance in a field or in prose") {
   CHECK(eye_distance_cm_of("Roughly 30-40 mm.", "eyes") == doctest::Approx(3.5));
   CHECK(eye_distance_cm_of("{'distance': '4 cm'}", "eyes") == doctest::Approx(4.0));
   CHECK_THROWS_WITH_AS(eye_distance_cm_of("I cannot tell from a photo.", "eyes"), doctest::Contains("no distance"), InputError);
+}
+
+TEST_CASE("hostile or ambiguous answers: meta keys, other fields, deep nesting, cut characters") {
+  CHECK_FALSE(match_region("notes"));
+  CHECK_FALSE(match_region("Comments"));
+  CHECK_FALSE(match_region("rump"));   // four letters: no guessing
+  CHECK_FALSE(match_region("toes"));
+  CHECK(match_region("nosetp") == Region::nosetip);
+  CHECK(match_region("under_tial") == Region::under_tail);
+  CHECK(match_region("bellly") == Region::belly);
+  CHECK_FALSE(match_region(std::string(100000, 'a')));
+  // "mane_thickness" in a table of lengths is the mane's thickness, not its length.
+  const json mane = json::parse(R"({"body": 2, "mane": 8, "mane_thickness": 3, "notes": "looks right"})");
+  const auto v = region_lengths(mane, {"length"}, {"thick"}, "length_cm", "a");
+  REQUIRE(v.values.size() == 2);
+  CHECK(v.values[1].first == Region::mane);
+  CHECK(v.values[1].second == doctest::Approx(8.0));
+  // A wrapper of regions beside a region key: both read, the wrapper's values first.
+  const json wrapped = json::parse(R"({"lengths": {"body": 2, "tail": 3}, "mane": {"length": 8, "thickness": 3}})");
+  const auto w = region_lengths(wrapped, {"length"}, {"thick"}, "length_cm", "a");
+  CHECK(w.values.size() == 3);
+  // Values that say "not given" are left to the fill rules.
+  CHECK(region_lengths(json::parse(R"({"body": 2, "mane": null, "tail": "N/A"})"), {"length"}, {}, "length_cm", "a").values.size() == 1);
+  // 5,000 nested lists: refused as an object, not a crash.
+  const std::string deep = "{\"body\": " + std::string(5000, '[') + std::string(5000, ']') + "}";
+  CHECK(find_objects(deep).empty());
+  // An error that quotes a long value cuts it between characters, so the message stays valid UTF-8.
+  const std::string value = std::string(39, 'x') + "\xc3\xa9\xc3\xa9 long";
+  try {
+    length_cm_of(json(value), "regions.body.length_cm");
+    FAIL("no error");
+  } catch (const InputError& e) {
+    CHECK_NOTHROW((void)json(std::string(e.what())).dump());
+  }
 }

@@ -195,3 +195,29 @@ TEST_CASE("hostile answers: mutated, deeply nested or huge, they end in a value 
   std::string digits(std::size_t(2) << 20, '7');
   CHECK_THROWS_AS(eye_distance_cm_of(digits, "eyes"), InputError);
 }
+
+TEST_CASE("the verification answer: each dict is the field named last before it; no values keeps the earlier ones") {
+  ScriptedModel model;
+  model.answers["verify"] = "I double-checked the length and thickness estimates.\nLength:\n{\"body\": 2.0}\nThickness:\n{\"body\": 0.7}";
+  Annotation a = annotate_with_vlm(std::ref(model), kImages, "test");
+  CHECK(a.knowledge.at(Region::body).length_cm == doctest::Approx(2.0));
+  CHECK(a.knowledge.at(Region::body).thickness_cm == doctest::Approx(0.7));
+
+  ScriptedModel pairs;
+  pairs.answers["verify"] = "Corrected thickness and length:\n{\"body\": {\"length\": 2.2, \"thickness\": 0.6}}";
+  a = annotate_with_vlm(std::ref(pairs), kImages, "test");
+  CHECK(a.knowledge.at(Region::body).length_cm == doctest::Approx(2.2));
+  CHECK(a.knowledge.at(Region::body).thickness_cm == doctest::Approx(0.6));
+
+  ScriptedModel content;
+  content.answers["verify"] = "Yes, I am confident the estimates are right.";
+  a = annotate_with_vlm(std::ref(content), kImages, "test");
+  CHECK(a.knowledge.at(Region::body).length_cm == doctest::Approx(1.0));  // the length answer's
+  CHECK(a.requests == 6);  // asked once more
+  CHECK(std::any_of(a.warnings.begin(), a.warnings.end(), [](const std::string& w) { return w.find("earlier ones stand") != std::string::npos; }));
+
+  ScriptedModel no_body;
+  no_body.answers["length"] = R"({"tail": 2, "ears": 1})";
+  CHECK_THROWS_WITH_AS(annotate_with_vlm(std::ref(no_body), kImages, "test"), doctest::Contains("no length for 'body'"), InputError);
+  CHECK(no_body.steps == std::vector<std::string>{"length", "length-retry"});
+}

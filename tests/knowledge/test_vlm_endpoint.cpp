@@ -117,6 +117,22 @@ TEST_CASE("the client: answers, retries, refusals, limits") {
     CHECK_THROWS_WITH_AS(chat_completion(endpoint(server), kHello), doctest::Contains("not JSON"), InputError);
     CHECK_THROWS_WITH_AS(chat_completion(endpoint(server), kHello), doctest::Contains("no 'choices'"), InputError);
   }
+  SUBCASE("a server that echoes the request headers, or nests its answer 100,000 deep") {
+    test::ChatServer server([](const json&, int i) {
+      return i == 0 ? test::reply(200, R"({"headers": {"Authorization": "Bearer )" + kKey + R"("}})")
+                    : test::reply(503, "{\"error\": " + std::string(100000, '[') + std::string(100000, ']') + "}");
+    });
+    try {
+      chat_completion(endpoint(server), kHello);
+      FAIL("no error");
+    } catch (const InputError& e) {
+      CHECK(std::string(e.what()).find("no 'choices'") != std::string::npos);
+      CHECK(std::string(e.what()).find("SECRET") == std::string::npos);
+    }
+    VlmEndpoint e = endpoint(server);
+    e.retries = 0;
+    CHECK_THROWS_WITH_AS(chat_completion(e, kHello), doctest::Contains("HTTP 503"), InputError);
+  }
   SUBCASE("nobody listening") {
     std::string url;
     {
