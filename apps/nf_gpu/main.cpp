@@ -13,6 +13,7 @@
 #include "engine/core/text.hpp"
 #include "engine/core/json.hpp"
 #include "engine/core/log.hpp"
+#include "engine/fur/prior_training.hpp"
 #include "engine/gpu/context.hpp"
 #include "engine/gradcheck/catalog.hpp"
 #include "engine/metrics/metrics_report.hpp"
@@ -233,6 +234,55 @@ int run_annotate(const nf::pipeline::ReconstructOptions& options, bool as_json, 
   return 0;
 }
 
+// `nf_gpu train-prior`: trains the strand prior, measures it and writes it with its record.
+int run_train_prior(const std::string& out, nf::fur::PriorTrainingOptions options, std::uint32_t eval_strands,
+                    std::uint32_t fit_iterations, bool as_json, const std::string& command_line) {
+  const std::filesystem::path path(out);
+  if (std::filesystem::exists(path)) {
+    // Replace only an earlier strand prior, never somebody else's file.
+    nf::gpu::Context probe;
+    try {
+      (void)nf::fur::StrandPrior::load(probe, path);
+    } catch (const nf::InputError&) {
+      throw nf::UsageError("--out " + out + " exists and is not a strand prior; choose another file");
+    }
+  }
+  nf::gpu::Context context;
+  nf::install_interrupt_handler();
+  std::fprintf(stderr, "train-prior: %u steps of %u strands on %s\n", options.steps, options.batch, context.info().name.c_str());
+  nf::fur::PriorTraining trained = nf::fur::train_strand_prior(context, options, [&](std::uint32_t step, double loss) {
+    if (step % 500 == 1 || step == options.steps) std::fprintf(stderr, "train-prior: step %u loss %.3g\n", step, loss);
+  });
+  const json evaluation = nf::fur::evaluate_prior(*trained.prior, eval_strands, fit_iterations, options.seed);
+  trained.prior->record = {{"command", command_line},
+                           {"seed", options.seed},
+                           {"steps", options.steps},
+                           {"batch", options.batch},
+                           {"lr", options.lr},
+                           {"latent_noise", options.latent_noise},
+                           {"latent_l2", options.latent_l2},
+                           {"segment_weight", options.segment_weight},
+                           {"device", context.info().name},
+                           {"seconds", trained.seconds},
+                           {"skipped_steps", trained.skipped_steps},
+                           {"curve", trained.curve},
+                           {"evaluation", evaluation},
+                           {"data", "procedural strands (engine/fur/strand_shapes.cpp); no external data or weights"}};
+  trained.prior->save(path);
+  if (as_json) {
+    std::cout << trained.prior->record.dump(2) << "\n";
+    return 0;
+  }
+  std::printf("train-prior: %.0f s, final loss %.4g -> %s\n", trained.seconds, trained.curve.back()[2].get<double>(), out.c_str());
+  std::printf("%-16s %24s %24s\n", "strands", "encode+decode mean / p95", "fitted mean / p95");
+  for (const auto& [name, set] : evaluation["sets"].items())
+    std::printf("%-16s %11.2f %% / %6.2f %% %11.2f %% / %6.2f %%\n", name.c_str(), 100 * set["encode_decode"]["mean"].get<double>(),
+                100 * set["encode_decode"]["p95"].get<double>(), 100 * set["fitted"]["mean"].get<double>(),
+                100 * set["fitted"]["p95"].get<double>());
+  std::printf("(point error as a share of the strand's length)\n");
+  return 0;
+}
+
 // The command as typed, quoted where needed, for "resume with" messages.
 std::string quoted_command_line(int argc, char** argv) {
   std::string line;
@@ -368,6 +418,21 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   annotate->add_flag("--json", annotate_json, "machine-readable output");
 
+  nf::fur::PriorTrainingOptions prior_options;
+  std::string prior_out;
+  std::uint32_t prior_eval_strands = 2000, prior_fit_iterations = 100;
+  bool prior_json = false;
+  std::vector<std::uint32_t> prior_hidden;
+  auto* train_prior = app.add_subcommand("train-prior", "train the strand prior (decoder from a 64-d latent to a 100-point strand) on procedural fur");
+  train_prior->add_option("--out", prior_out, "weights file to write (.nfwt; an existing file must be a strand prior)")->required();
+  train_prior->add_option("--steps", prior_options.steps, "training steps (default 6000)")->check(CLI::Range(1, 10000000));
+  train_prior->add_option("--seed", prior_options.seed, "seed of the initialisation, the strands and the noise (default 1)");
+  train_prior->add_option("--batch", prior_options.batch, "strands per step (default 2048)")->check(CLI::Range(8, 65536));
+  train_prior->add_option("--hidden", prior_hidden, "hidden widths of both networks (default 256,256)")->delimiter(',')->check(CLI::Range(1, 1024));
+  train_prior->add_option("--eval-strands", prior_eval_strands, "strands per evaluation set (default 2000)")->check(CLI::Range(10, 1000000));
+  train_prior->add_option("--fit-iterations", prior_fit_iterations, "latent-fitting iterations in the evaluation (default 100)")->check(CLI::Range(0, 100000));
+  train_prior->add_flag("--json", prior_json, "print the record as JSON");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -401,6 +466,11 @@ int main(int argc, char** argv) {
       annotate_options.scene = annotate_scene, annotate_options.work = annotate_out, annotate_options.run.to = "knowledge";
       if (annotate_scale > 0) annotate_options.settings.push_back("knowledge.cm_per_unit=" + json(annotate_scale).dump());
       return run_annotate(annotate_options, annotate_json, quoted_command_line(argc, argv));
+    }
+    if (*train_prior) {
+      if (!prior_hidden.empty()) prior_options.shape.encoder_hidden = prior_options.shape.decoder_hidden = prior_hidden;
+      return run_train_prior(prior_out, prior_options, prior_eval_strands, prior_fit_iterations, prior_json,
+                             quoted_command_line(argc, argv));
     }
     if (*orient) {
       orient_options.scene = orient_scene, orient_options.out = orient_out;

@@ -82,6 +82,22 @@ Case wide_case() {
   return c;
 }
 
+// The strand prior's decoder (engine/fur/strand_prior.hpp): 64 latents to 297 segment values.
+// At its real widths (256, 256) the device is checked against the reference only (finite
+// differences over 157k parameters would take hours); narrow hidden layers with the same input and
+// output widths are checked against finite differences too.
+Case strand_decoder_case() {
+  Case c = make_case("strand_decoder", Activation::ReLU, Activation::None, 9, 1.0, 100, 30, 8, {64, 256, 256, 297});
+  c.step_double = {0.0, 0.0};
+  c.step_float = {0.0, 0.0};
+  return c;
+}
+Case strand_decoder_narrow_case() {
+  Case c = make_case("strand_decoder_narrow", Activation::ReLU, Activation::None, 5, 1.0, 100, 30, 9, {64, 8, 8, 297});
+  c.step_float = {1e-4, 1e-4};
+  return c;
+}
+
 class MlpCheck : public gradcheck::WithReference<MlpCheck> {
  public:
   std::string name() const override { return "nn/mlp"; }
@@ -97,6 +113,8 @@ class MlpCheck : public gradcheck::WithReference<MlpCheck> {
         make_case("sine_siren", Activation::Sine, Activation::None, 65, 1.0, 100, 30, 4),
         make_case("none_linear", Activation::None, Activation::Sine, 129, 1.0, 100, 2, 5),
         wide_case(),
+        strand_decoder_case(),
+        strand_decoder_narrow_case(),
     };
   }
 

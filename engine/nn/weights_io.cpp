@@ -64,10 +64,14 @@ void save_weights(const std::filesystem::path& path, const WeightsFile& w) {
 }
 
 WeightsFile load_weights(const std::filesystem::path& path) {
-  const std::string where = path.string();
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(where + ": cannot open weights file");
-  const std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (!in) throw InputError(path.string() + ": cannot open weights file");
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return parse_weights(bytes, path.string());
+}
+
+WeightsFile parse_weights(std::string_view text, const std::string& where) {
+  const std::span<const unsigned char> bytes(reinterpret_cast<const unsigned char*>(text.data()), text.size());
   if (bytes.size() < 12 || std::memcmp(bytes.data(), kMagic, 4) != 0)
     throw InputError(where + ": not an nf_gpu weights file (magic 'NFWT' missing)");
   const std::uint32_t version = get_u32(&bytes[4]);

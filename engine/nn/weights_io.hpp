@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "engine/core/json.hpp"
@@ -36,6 +37,8 @@ struct WeightsFile {
 
 void save_weights(const std::filesystem::path& path, const WeightsFile& weights);
 WeightsFile load_weights(const std::filesystem::path& path);
+// The same from the bytes of such a file (e.g. embedded in the binary); `source` names it in errors.
+WeightsFile parse_weights(std::string_view bytes, const std::string& source);
 
 // An MLP's parameters as tensors "layer<i>.weight" [out, in] and "layer<i>.bias" [out] (no padding),
 // and back into the Mlp layout, checking the file's network configuration and every shape.
