@@ -249,7 +249,8 @@ double read_metric_scale(const KnowledgeOutputs& outputs) {
 
 void KnowledgeStage::check_needed_settings(const std::string& quality, const json& overrides) const {
   const KnowledgeSettings s = knowledge_settings().resolve(quality, overrides);
-  if (s.file.empty() && s.preset.empty() && s.vlm.empty()) throw UsageError("stage knowledge: " + source_help());
+  if (s.file.empty() && s.preset.empty() && s.vlm.empty())
+    throw UsageError("stage knowledge: " + source_help() + "; or stop before it with --to body");
 }
 
 std::vector<fs::path> KnowledgeStage::inputs(const StageContext& c) const {
