@@ -428,7 +428,7 @@ int main(int argc, char** argv) {
   train_prior->add_option("--steps", prior_options.steps, "training steps (default 6000)")->check(CLI::Range(1, 10000000));
   train_prior->add_option("--seed", prior_options.seed, "seed of the initialisation, the strands and the noise (default 1)");
   train_prior->add_option("--batch", prior_options.batch, "strands per step (default 2048)")->check(CLI::Range(8, 65536));
-  train_prior->add_option("--hidden", prior_hidden, "hidden widths of both networks (default 256,256)")->delimiter(',')->check(CLI::Range(1, 1024));
+  train_prior->add_option("--hidden", prior_hidden, "hidden widths of both networks (default 128,128)")->delimiter(',')->check(CLI::Range(1, 1024));
   train_prior->add_option("--eval-strands", prior_eval_strands, "strands per evaluation set (default 2000)")->check(CLI::Range(10, 1000000));
   train_prior->add_option("--fit-iterations", prior_fit_iterations, "latent-fitting iterations in the evaluation (default 100)")->check(CLI::Range(0, 100000));
   train_prior->add_flag("--json", prior_json, "print the record as JSON");

@@ -41,13 +41,16 @@ std::vector<NetSpec> nets() {
   sdf.hidden = {64, 64};
   sdf.output_dim = 16;  // SDF + 15 geometry features
   sdf.hidden_activation = {nn::Activation::Softplus, 100.f, 30.f};
-  nn::MlpConfig decoder;
+  nn::MlpConfig decoder;  // the shape first benchmarked (and on the H100)
   decoder.input_dim = 64;
   decoder.hidden = {256, 256};
   decoder.output_dim = 297;
+  nn::MlpConfig shipped = decoder;  // the shipped strand prior's decoder (engine/fur/strand_prior.hpp)
+  shipped.hidden = {128, 128};
   return {{"fur_field", Encoding::Frequency, fur, 15000, 2048},
           {"neus_sdf", Encoding::HashGrid, sdf, 32768, 4096},
-          {"strand_decoder", Encoding::None, decoder, 15000, 2048}};
+          {"strand_decoder", Encoding::None, decoder, 15000, 2048},
+          {"strand_decoder_128", Encoding::None, shipped, 15000, 2048}};
 }
 
 std::string shape_text(const nn::MlpConfig& c) {
