@@ -1,6 +1,7 @@
 #include "engine/core/text.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <numeric>
 
 namespace nf {
@@ -34,6 +35,11 @@ std::string closest_match(std::string_view word, const std::vector<std::string>&
 std::string did_you_mean(std::string_view word, const std::vector<std::string>& candidates) {
   const std::string best = closest_match(word, candidates);
   return best.empty() ? std::string() : " (did you mean '" + best + "'?)";
+}
+
+std::string to_lower(std::string text) {
+  for (char& c : text) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return text;
 }
 
 std::string shorten(std::string_view text, std::size_t max_bytes) {

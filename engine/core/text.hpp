@@ -16,6 +16,9 @@ std::string closest_match(std::string_view word, const std::vector<std::string>&
 // " (did you mean 'x'?)" for closest_match, or "" when nothing is close.
 std::string did_you_mean(std::string_view word, const std::vector<std::string>& candidates);
 
+// ASCII letters lower-cased (other bytes, UTF-8 included, unchanged).
+std::string to_lower(std::string text);
+
 // At most `max_bytes` of `text` (cut at a UTF-8 character boundary, "..." appended when cut), with
 // control characters as spaces: for quoting untrusted text in a message.
 std::string shorten(std::string_view text, std::size_t max_bytes);

@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "engine/core/error.hpp"
+#include "engine/core/text.hpp"
 #include "engine/core/log.hpp"
 #include "engine/gpu/context_impl.hpp"
 #include "engine/gpu/shader_registry.hpp"
@@ -21,11 +22,6 @@ constexpr const char* kNoDeviceAdvice =
 bool env_flag(const char* name) {
   const char* v = std::getenv(name);
   return v && *v && std::strcmp(v, "0") != 0;
-}
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return s;
 }
 
 VKAPI_ATTR VkBool32 VKAPI_CALL on_validation_message(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
@@ -112,7 +108,7 @@ std::uint32_t choose_device(const std::vector<DeviceInfo>& devices, const std::s
     const bool numeric = std::all_of(selector.begin(), selector.end(), [](unsigned char c) { return std::isdigit(c); });
     for (const auto& d : devices) {
       if ((numeric && std::to_string(d.index) == selector) ||
-          (!numeric && lower(d.name).find(lower(selector)) != std::string::npos)) {
+          (!numeric && to_lower(d.name).find(to_lower(selector)) != std::string::npos)) {
         if (std::find(usable.begin(), usable.end(), d.index) == usable.end())
           throw DeviceError("NF_DEVICE='" + selector + "' selects '" + d.name + "', which supports only Vulkan " +
                             d.api_version + "; nf_gpu needs 1.2");

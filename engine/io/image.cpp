@@ -17,6 +17,7 @@
 
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/text.hpp"
 #include "engine/io/binary_io.hpp"
 
 namespace nf::io {
@@ -70,8 +71,7 @@ Image read_exr(const std::filesystem::path& path) {
 }  // namespace
 
 Image read_image(const std::filesystem::path& path) {
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  const std::string ext = to_lower(path.extension().string());
   if (ext == ".exr") return read_exr(path);
   const std::vector<char> bytes = read_file_bytes(path);
   const auto* data = reinterpret_cast<const stbi_uc*>(bytes.data());

@@ -1,5 +1,7 @@
 #include "engine/io/json_fields.hpp"
 
+#include <cmath>
+
 #include <fstream>
 #include <iterator>
 
@@ -24,6 +26,21 @@ json parse_json(std::string_view text, const std::string& source) {
   } catch (const json::exception& e) {
     throw InputError(source + ": not valid JSON (" + json_error_text(e) + ")");
   }
+}
+
+glm::dmat4 matrix_rows(const JsonField& rows) {
+  if (rows.size() != 4) rows.fail("expected 4 rows of 4 numbers, got " + std::to_string(rows.size()) + " rows");
+  glm::dmat4 m(1.0);
+  for (std::size_t r = 0; r < 4; ++r) {
+    const JsonField row = rows.at(r);
+    if (row.size() != 4) row.fail("expected 4 numbers, got " + std::to_string(row.size()));
+    for (std::size_t c = 0; c < 4; ++c) {
+      const double v = row.at(c).number();
+      if (!std::isfinite(v)) row.at(c).fail("not a finite number");
+      m[int(c)][int(r)] = v;
+    }
+  }
+  return m;
 }
 
 std::optional<json> parse_json_bounded(std::string_view text, int max_depth) {

@@ -7,6 +7,8 @@
 #include <string>
 #include <string_view>
 
+#include <glm/glm.hpp>
+
 #include "engine/core/json.hpp"
 
 namespace nf::io {
@@ -55,5 +57,8 @@ class JsonField {
   const json* value_;
   std::string source_, path_;
 };
+
+// A 4x4 matrix written as four rows (core/json.hpp's json_matrix_rows), errors naming the entry.
+glm::dmat4 matrix_rows(const JsonField& rows);
 
 }  // namespace nf::io

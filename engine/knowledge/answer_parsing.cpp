@@ -15,11 +15,6 @@ namespace nf::knowledge {
 using body::Region;
 namespace {
 
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return s;
-}
-
 // Answers nest no deeper than this (a dict of lists or of per-region dicts); deeper ones are refused
 // before anything copies or prints them.
 constexpr int kMaxAnswerDepth = 16;
@@ -140,7 +135,7 @@ std::vector<std::pair<std::size_t, std::size_t>> brace_pairs(const std::string& 
 
 std::string normalised(const std::string& name) {
   std::string out;
-  for (char c : lower(name)) {
+  for (char c : to_lower(name)) {
     if (std::isalnum(static_cast<unsigned char>(c))) out += c;
     else if (!out.empty() && out.back() != '_') out += '_';
   }
@@ -208,7 +203,7 @@ void skip_spaces(const std::string& s, std::size_t& pos) {
 
 // "2", "2.5 cm", "25mm", "2-3 cm", "2 to 3 cm", "~1.5cm", "about 2 cm": cm, or nullopt.
 std::optional<double> length_text_cm(std::string s) {
-  s = lower(s);
+  s = to_lower(s);
   for (const char* prefix : {"approximately", "approx.", "approx", "about", "around", "roughly", "~", "≈", "<", ">"}) {
     const std::size_t at = s.find_first_not_of(' ');
     if (at != std::string::npos && s.compare(at, std::strlen(prefix), prefix) == 0) s.erase(0, at + std::strlen(prefix));
@@ -251,7 +246,7 @@ std::optional<glm::vec3> axis_words(const std::string& text) {
   glm::vec3 sum(0.f);
   int found = 0;
   std::string word;
-  const std::string t = lower(text) + " ";
+  const std::string t = to_lower(text) + " ";
   for (char c : t) {
     if (std::isalnum(static_cast<unsigned char>(c)) || ((c == '-' || c == '+') && word.empty())) {
       word += c;
@@ -283,7 +278,7 @@ double number_of(const json& v, const std::string& where) {
 }
 
 bool key_has_any(const std::string& key, const std::vector<std::string>& hints) {
-  const std::string k = lower(key);
+  const std::string k = to_lower(key);
   return std::any_of(hints.begin(), hints.end(), [&](const std::string& h) { return k.find(h) != std::string::npos; });
 }
 
@@ -324,7 +319,7 @@ std::vector<const json*> region_tables(const json& object, const std::vector<std
 bool absent(const json& v) {
   if (v.is_null()) return true;
   if (!v.is_string()) return false;
-  const std::string s = lower(v.get<std::string>());
+  const std::string s = to_lower(v.get<std::string>());
   return s.empty() || s == "n/a" || s == "na" || s == "none" || s == "unknown" || s == "-" || s == "not visible";
 }
 
@@ -375,7 +370,7 @@ std::vector<FoundObject> find_objects(const std::string& text) {
     if (open < covered_until || close + 1 - open > kMaxObject) continue;  // inside one found, or too big
     if (++tries > kMaxTries) break;
     if (std::optional<json> object = parse_object(std::string_view(text).substr(open, close + 1 - open))) {
-      std::string label = lower(text.substr(label_start, open - label_start));
+      std::string label = to_lower(text.substr(label_start, open - label_start));
       if (label.size() > 200) label = label.substr(label.size() - 200);
       found.push_back({std::move(*object), std::move(label)});
       label_start = covered_until = close + 1;
@@ -499,7 +494,7 @@ double eye_distance_cm_of(const std::string& text, const std::string& where) {
     skip_spaces(text, end);
     std::size_t word_end = end;
     while (word_end < text.size() && std::isalpha(static_cast<unsigned char>(text[word_end]))) ++word_end;
-    const std::string unit = lower(text.substr(end, word_end - end));
+    const std::string unit = to_lower(text.substr(end, word_end - end));
     if (unit == "cm" || unit == "mm" || unit.rfind("centimet", 0) == 0 || unit.rfind("millimet", 0) == 0 ||
         unit.rfind("inch", 0) == 0)
       if (const std::optional<double> cm = length_text_cm(text.substr(i, word_end - i))) return *cm;

@@ -15,10 +15,6 @@ namespace {
 
 std::string name_of(Region r) { return std::string(body::kRegionNames[std::size_t(r)]); }
 
-std::string lower_copy(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return s;
-}
 
 const std::vector<std::string> kLengthHints{"length", "long"};
 const std::vector<std::string> kThicknessHints{"thick", "subtract", "effective", "remov", "depth"};
@@ -88,7 +84,7 @@ RegionValues<double> table_in(const std::vector<FoundObject>& objects, char fiel
 bool has_wrapper(const json& o, const std::vector<std::string>& hints) {
   for (const auto& [key, value] : o.items()) {
     if (!value.is_object()) continue;
-    const std::string k = lower_copy(key);
+    const std::string k = to_lower(key);
     if (std::any_of(hints.begin(), hints.end(), [&](const std::string& h) { return k.find(h) != std::string::npos; })) return true;
   }
   return false;

@@ -48,9 +48,7 @@ std::size_t on_header(char* data, std::size_t size, std::size_t count, void* use
   auto* t = static_cast<Transfer*>(user);
   const std::string line(data, size * count);
   static const std::string kRetry = "retry-after:";
-  std::string lower = line.substr(0, kRetry.size());
-  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  if (lower == kRetry) {
+  if (to_lower(line.substr(0, kRetry.size())) == kRetry) {
     try {
       t->retry_after_s = std::stod(line.substr(kRetry.size()));
     } catch (...) {  // an HTTP date: fall back to our own back-off
@@ -64,12 +62,6 @@ int on_progress(void*, curl_off_t, curl_off_t, curl_off_t, curl_off_t) { return 
 // Server answers nest no deeper than this; a deeper one is refused before anything copies it.
 constexpr int kMaxReplyDepth = 32;
 
-std::string masked(std::string text, const std::string& api_key) {
-  if (api_key.size() >= 4)  // a server that echoes the key must not put it into our messages
-    for (std::size_t at; (at = text.find(api_key)) != std::string::npos;) text.replace(at, api_key.size(), "***");
-  return text;
-}
-
 // The server's own explanation, from an OpenAI-style {"error": {"message": ...}} or the raw text:
 // the key masked first, then shortened at a character boundary.
 std::string server_message(const std::string& body, const std::string& api_key) {
@@ -80,7 +72,7 @@ std::string server_message(const std::string& body, const std::string& api_key) 
            : e.is_string()                                                      ? e.get<std::string>()
                                                                                 : std::string("(an error without a message)");
   }
-  text = shorten(masked(text, api_key), 300);
+  text = shorten(mask_secret(text, api_key), 300);
   return text.empty() ? "(no message)" : text;
 }
 
@@ -128,6 +120,12 @@ ChatReply parse_reply(const std::string& body, const std::string& where, const s
 }
 
 }  // namespace
+
+std::string mask_secret(std::string text, const std::string& secret) {
+  if (secret.size() >= 4)
+    for (std::size_t at; (at = text.find(secret)) != std::string::npos;) text.replace(at, secret.size(), "***");
+  return text;
+}
 
 std::string chat_completions_url(const std::string& url) {
   if (url.rfind("http://", 0) != 0 && url.rfind("https://", 0) != 0)

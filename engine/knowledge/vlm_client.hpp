@@ -27,6 +27,9 @@ struct VlmEndpoint {
 // The chat-completions URL for what the user typed ("http://localhost:11434" ->
 // "http://localhost:11434/v1/chat/completions"). UsageError when it is not http(s).
 std::string chat_completions_url(const std::string& url);
+// `text` with every occurrence of `secret` (the API key) replaced by "***": for anything a server
+// sends back that reaches a message, a log or a file.
+std::string mask_secret(std::string text, const std::string& secret);
 // The URL without user name, password or query (which may hold a key): for logs and transcripts.
 std::string redacted_url(const std::string& url);
 

@@ -12,6 +12,7 @@
 #include "engine/core/interrupt.hpp"
 #include "engine/core/log.hpp"
 #include "engine/io/ground_truth.hpp"
+#include "engine/io/json_fields.hpp"
 #include "engine/io/mesh.hpp"
 #include "engine/pipeline/neus_stage.hpp"
 #include "engine/synth/preview.hpp"
@@ -76,6 +77,18 @@ json ground_truth_metrics(const StageContext& c, const geometry::Mesh& labelled,
 }
 
 }  // namespace
+
+glm::dmat4 read_animal_to_world(const BodyOutputs& o) {
+  const json j = io::read_json_file(o.animal_frame());
+  return io::matrix_rows(io::JsonField(j, o.animal_frame().string()).at("animal_to_world"));
+}
+
+double read_eye_distance(const BodyOutputs& o) {
+  const json j = io::read_json_file(o.eyes());
+  const io::JsonField d = io::JsonField(j, o.eyes().string()).at("distance");
+  if (!(std::isfinite(d.number()) && d.number() >= 0)) d.fail("expected a distance of 0 or more");
+  return d.number();
+}
 
 std::vector<fs::path> BodyStage::inputs(const StageContext& c) const {
   std::vector<fs::path> files{neus_outputs(c.work).outer()};

@@ -5,6 +5,8 @@
 // (`nf_gpu reconstruct --help-stage body`).
 #include <string>
 
+#include <glm/glm.hpp>
+
 #include "engine/body/body_fit.hpp"
 #include "engine/pipeline/stage.hpp"
 
@@ -21,6 +23,11 @@ struct BodyOutputs {
   std::filesystem::path previews() const { return dir / "previews"; }               // region colours, 2 cameras
 };
 inline BodyOutputs body_outputs(const std::filesystem::path& work) { return {work / "body"}; }
+// What later stages read of a finished body stage: the animal frame -> world map (its columns:
+// left, up, forward, scaled alike, and the origin) and the eye centres' distance in scene units.
+// InputError naming the file and field when one is malformed.
+glm::dmat4 read_animal_to_world(const BodyOutputs& outputs);
+double read_eye_distance(const BodyOutputs& outputs);
 
 struct BodySettings {
   body::BodyFitOptions fit;

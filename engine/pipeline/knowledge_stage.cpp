@@ -38,13 +38,6 @@ std::string source_help() {
          "OpenAI-compatible endpoint; the API key from " + std::string(kVlmKeyVariable) + ")";
 }
 
-glm::dmat4 matrix_rows(const io::JsonField& rows) {
-  glm::dmat4 m(1.0);
-  for (std::size_t r = 0; r < 4; ++r)
-    for (std::size_t col = 0; col < 4; ++col) m[int(col)][int(r)] = rows.at(r).at(col).number();
-  return m;
-}
-
 // Every request of a VLM annotation goes through here: answered from the cache when the same
 // conversation was asked before (images, prompts, model, sample), else sent; either way one line of
 // the transcript. The API key is never in a line: images are named by file, and any echo of the key
@@ -129,11 +122,7 @@ class VlmSession {
           }
     return out;
   }
-  std::string masked(std::string text) const {
-    if (endpoint_.api_key.size() >= 4)
-      for (std::size_t at; (at = text.find(endpoint_.api_key)) != std::string::npos;) text.replace(at, endpoint_.api_key.size(), "***");
-    return text;
-  }
+  std::string masked(std::string text) const { return knowledge::mask_secret(std::move(text), endpoint_.api_key); }
 
   knowledge::VlmEndpoint endpoint_;
   fs::path cache_;
@@ -228,7 +217,7 @@ json ground_truth_metrics(const StageContext& c, const knowledge::MetricScale& s
   const io::JsonField info(gt->info, gt->scene_json().string());
   if (const auto eye = info.find("eye_distance_cm")) out["eye_distance_error"] = eye_units * gt->cm_per_unit / eye->number() - 1.0;
   if (const auto rows = info.find("animal_to_world")) {
-    const glm::dmat4 truth = matrix_rows(*rows);
+    const glm::dmat4 truth = io::matrix_rows(*rows);
     const auto angle = [&](int axis) {
       const double d = glm::dot(glm::normalize(glm::dvec3(fitted[axis])), glm::normalize(glm::dvec3(truth[axis])));
       return std::acos(std::clamp(d, -1.0, 1.0)) * 180.0 / 3.14159265358979;
@@ -285,10 +274,8 @@ json KnowledgeStage::run(StageContext& c, const fs::path& out_dir, const fs::pat
   const BodyOutputs body = body_outputs(c.work);
   const auto t0 = std::chrono::steady_clock::now();
 
-  const json frame_json = io::read_json_file(body.animal_frame());
-  const glm::dmat4 animal_to_world = matrix_rows(io::JsonField(frame_json, body.animal_frame().string()).at("animal_to_world"));
-  const json eyes_json = io::read_json_file(body.eyes());
-  const double eye_units = io::JsonField(eyes_json, body.eyes().string()).at("distance").number();
+  const glm::dmat4 animal_to_world = read_animal_to_world(body);
+  const double eye_units = read_eye_distance(body);
 
   knowledge::Knowledge k;
   std::vector<std::string> warnings;

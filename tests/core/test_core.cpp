@@ -95,6 +95,10 @@ TEST_CASE("did you mean: edit distance and the closest known name") {
   CHECK(edit_distance("steps", "stpes") == 2);
   CHECK(edit_distance("", "abc") == 3);
   CHECK(edit_distance("kitten", "sitting") == 3);
+  CHECK(to_lower("Front Legs \xc3\x89") == "front legs \xc3\x89");  // UTF-8 bytes untouched
+  CHECK(shorten("abc", 5) == "abc");
+  CHECK(shorten(std::string(39, 'x') + "\xc3\xa9z", 40) == std::string(39, 'x') + "...");  // not inside the character
+  CHECK(shorten("a\nb", 5) == "a b");
   const std::vector<std::string> keys{"steps", "rays", "samples_per_ray", "mesh_resolution"};
   CHECK(closest_match("step", keys) == "steps");
   CHECK(closest_match("mesh_reslution", keys) == "mesh_resolution");

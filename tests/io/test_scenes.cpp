@@ -13,6 +13,7 @@
 
 #include "engine/core/error.hpp"
 #include "engine/io/image.hpp"
+#include "engine/io/json_fields.hpp"
 #include "engine/io/scene.hpp"
 #include "tests/support/files.hpp"
 #include "tests/support/scene_fixtures.hpp"
@@ -232,4 +233,16 @@ TEST_CASE("a truncated image is found by the file check, before any stage runs, 
   CHECK_THROWS_WITH_AS(s.check_files("scene"),
                        doctest::Contains((s.cameras[1].image.string() + ": truncated or corrupt PNG header").c_str()), InputError);
   fs::remove_all(dir);
+}
+
+TEST_CASE("JSON helpers: a matrix by rows, errors by path; untrusted text bounded in depth") {
+  const json ok = json::parse(R"({"m": [[1, 0, 0, 5], [0, 2, 0, 6], [0, 0, 3, 7], [0, 0, 0, 1]]})");
+  const glm::dmat4 m = io::matrix_rows(io::JsonField(ok, "frame.json").at("m"));
+  CHECK(m[3][0] == 5.0);  // column-major: the translation column
+  CHECK(m[1][1] == 2.0);
+  const json short_row = json::parse(R"({"m": [[1, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]})");
+  CHECK_THROWS_WITH_AS(io::matrix_rows(io::JsonField(short_row, "frame.json").at("m")), doctest::Contains("frame.json: m[0]"), InputError);
+  CHECK(io::parse_json_bounded("[[1]]", 4).has_value());
+  CHECK_FALSE(io::parse_json_bounded(std::string(1000, '[') + std::string(1000, ']'), 32).has_value());
+  CHECK_FALSE(io::parse_json_bounded("{not json", 32).has_value());
 }
