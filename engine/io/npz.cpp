@@ -133,6 +133,7 @@ std::string npy_bytes(const NpyWrite& a, const std::string& where) {
     else if (a.dtype == "<f4") { const float f = float(v); std::memcpy(b, &f, n = 4); }
     else if (a.dtype == "<i8") { const std::int64_t i = std::int64_t(v); std::memcpy(b, &i, n = 8); }
     else if (a.dtype == "<u4") { const std::uint32_t u = std::uint32_t(v); std::memcpy(b, &u, n = 4); }
+    else if (a.dtype == "<i4") { const std::int32_t i = std::int32_t(v); std::memcpy(b, &i, n = 4); }
     else throw InternalError(where + ": unsupported dtype " + a.dtype);
     out.append(b, n);
   }
