@@ -1,7 +1,9 @@
 #pragma once
 // `nf_gpu bench --suite body`: the body stage on synthetic animals (cat, dog, lion; two seeds each),
 // from the NeuS mesh the pipeline itself produces: label accuracy against the ground truth,
-// per-region recall, eye-centre error, chamfer after each fitting stage, and time per stage.
+// per-region recall, eye-centre error, chamfer after each fitting stage, and time per stage; then
+// the defur and frames stages: M_bald's chamfer to the true bald body (beside M_NeuS's), the
+// tangent field's smoothness and its angle to the true growth direction, and each step's time.
 #include "engine/bench/suites.hpp"
 
 namespace nf::bench {

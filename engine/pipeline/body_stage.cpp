@@ -15,13 +15,14 @@
 #include "engine/io/json_fields.hpp"
 #include "engine/io/mesh.hpp"
 #include "engine/pipeline/neus_stage.hpp"
+#include "engine/pipeline/preview_views.hpp"
 #include "engine/synth/preview.hpp"
 
 namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 1;
+constexpr int kStageVersion = 2;  // 2: fit.json
 
 BodySettings settings_of(const StageContext& c) {
   return body_settings().resolve(c.quality, c.settings.value("body", json::object()));
@@ -34,25 +35,6 @@ body::FrameHints frame_hints(const io::Scene& scene) {
   body::FrameHints hints;
   if (!scene.cameras.empty() && glm::length(sum) > 0.5 * double(scene.cameras.size())) hints.up = glm::normalize(sum);
   return hints;
-}
-
-// Two views for the previews: the first camera and the one looking most across it.
-std::vector<std::uint32_t> preview_views(const io::Scene& scene, int count) {
-  std::vector<std::uint32_t> views;
-  if (scene.cameras.empty() || count <= 0) return views;
-  views.push_back(0);
-  const glm::dvec3 first = glm::dvec3(scene.cameras[0].camera_to_world[2]);
-  while (int(views.size()) < count && views.size() < scene.cameras.size()) {
-    std::uint32_t best = 0;
-    double best_score = std::numeric_limits<double>::infinity();
-    for (std::uint32_t k = 0; k < scene.cameras.size(); ++k) {
-      if (std::find(views.begin(), views.end(), k) != views.end()) continue;
-      const double score = std::abs(glm::dot(first, glm::normalize(glm::dvec3(scene.cameras[k].camera_to_world[2]))));
-      if (score < best_score) best_score = score, best = k;
-    }
-    views.push_back(best);
-  }
-  return views;
 }
 
 json ground_truth_metrics(const StageContext& c, const geometry::Mesh& labelled, const body::FittedEyes& eyes) {
@@ -90,6 +72,30 @@ double read_eye_distance(const BodyOutputs& o) {
   return d.number();
 }
 
+body::BodyModel body_model_of(const BodySettings& s) {
+  return s.model.empty() ? body::default_template() : body::load_smal_model(s.model);
+}
+
+body::BodyFit read_body_fit(const BodyOutputs& o, const body::BodyModel& model) {
+  const json j = io::read_json_file(o.fit_state());
+  const io::JsonField root(j, o.fit_state().string());
+  body::BodyFit fit;
+  fit.fit_to_world = io::matrix_rows(root.at("fit_to_world"));
+  const io::JsonField vars = root.at("variables");
+  if (!vars.value().is_array()) vars.fail("expected an array of numbers");
+  const std::size_t expected = body::PoseLayout::of(model, true).size();
+  if (vars.value().size() != expected)
+    vars.fail("has " + std::to_string(vars.value().size()) + " values; the body model " + model.name + " needs " +
+              std::to_string(expected) + " (was the body stage run with another model?)");
+  for (std::size_t i = 0; i < expected; ++i) {
+    const json& v = vars.value()[i];
+    if (!v.is_number() || !std::isfinite(v.get<double>())) vars.fail("value " + std::to_string(i) + " is not a finite number");
+    fit.variables.push_back(v.get<double>());
+  }
+  fit.animal_to_world = io::matrix_rows(root.at("animal_to_world"));
+  return fit;
+}
+
 std::vector<fs::path> BodyStage::inputs(const StageContext& c) const {
   std::vector<fs::path> files{neus_outputs(c.work).outer()};
   const BodySettings s = settings_of(c);
@@ -111,7 +117,7 @@ json BodyStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) {
   const BodySettings s = settings_of(c);
   const BodyOutputs out{out_dir};
   const auto t0 = std::chrono::steady_clock::now();
-  const body::BodyModel model = s.model.empty() ? body::default_template() : body::load_smal_model(s.model);
+  const body::BodyModel model = body_model_of(s);
   const double model_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const fs::path target_file = neus_outputs(c.work).outer();
   geometry::Mesh target = io::read_mesh(target_file);
@@ -146,6 +152,11 @@ json BodyStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) {
                                                       "z: tail to head"}}
                                             .dump(2) + "\n");
 
+  write_file_atomic(out.fit_state(), json{{"model", model.name},
+                                          {"fit_to_world", json_matrix_rows(fit.fit_to_world)},
+                                          {"animal_to_world", json_matrix_rows(fit.animal_to_world)},
+                                          {"variables", fit.variables}}
+                                         .dump() + "\n");
   const body::PoseLayout layout = body::PoseLayout::of(model, true);
   json shape = json::object(), pose = json::object();
   for (std::size_t k = 0; k < model.shape_count(); ++k) shape[model.shape_names[k]] = fit.variables[layout.shape_begin() + k];

@@ -19,6 +19,7 @@ struct BodyOutputs {
   std::filesystem::path params() const { return dir / "params.json"; }               // shape, pose, placement, losses
   std::filesystem::path eyes() const { return dir / "eyes.json"; }                   // eye centres, world
   std::filesystem::path animal_frame() const { return dir / "animal_frame.json"; }   // animal frame -> world
+  std::filesystem::path fit_state() const { return dir / "fit.json"; }               // the fit's variables, for the re-fit
   std::filesystem::path metrics() const { return dir / "metrics.json"; }             // the stage summary
   std::filesystem::path previews() const { return dir / "previews"; }               // region colours, 2 cameras
 };
@@ -28,6 +29,9 @@ inline BodyOutputs body_outputs(const std::filesystem::path& work) { return {wor
 // InputError naming the file and field when one is malformed.
 glm::dmat4 read_animal_to_world(const BodyOutputs& outputs);
 double read_eye_distance(const BodyOutputs& outputs);
+// The fit's variables and frame (what body::refit_body starts from; the posed meshes are not
+// rebuilt). InputError naming the file and field when it is malformed or does not match `model`.
+body::BodyFit read_body_fit(const BodyOutputs& outputs, const body::BodyModel& model);
 
 struct BodySettings {
   body::BodyFitOptions fit;
@@ -35,6 +39,8 @@ struct BodySettings {
   int preview_views = 2;
 };
 const SettingsSchema<BodySettings>& body_settings();
+// The body model a run's settings name (the built-in family or a SMAL file).
+body::BodyModel body_model_of(const BodySettings& settings);
 
 class BodyStage : public Stage {
  public:

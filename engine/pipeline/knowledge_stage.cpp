@@ -242,6 +242,22 @@ void KnowledgeStage::check_needed_settings(const std::string& quality, const jso
     throw UsageError("stage knowledge: " + source_help() + "; or stop before it with --to body");
 }
 
+std::array<glm::vec3, body::kRegionCount> read_directions_world(const KnowledgeOutputs& outputs) {
+  const json j = io::read_json_file(outputs.directions_world());
+  const io::JsonField directions = io::JsonField(j, outputs.directions_world().string()).at("directions");
+  std::array<glm::vec3, body::kRegionCount> out{};
+  for (int r = 0; r < body::kRegionCount; ++r) {
+    const auto d = directions.find(body::kRegionNames[std::size_t(r)]);
+    if (!d) continue;
+    glm::dvec3 v;
+    for (int c = 0; c < 3; ++c) v[c] = d->at(std::size_t(c)).number();
+    const double n = glm::length(v);
+    if (!(std::isfinite(n) && n > 0.5 && n < 1.5)) d->fail("expected a unit vector");
+    out[std::size_t(r)] = glm::vec3(v / n);
+  }
+  return out;
+}
+
 std::vector<fs::path> KnowledgeStage::inputs(const StageContext& c) const {
   const BodyOutputs body = body_outputs(c.work);
   std::vector<fs::path> files{body.animal_frame(), body.eyes()};

@@ -4,7 +4,10 @@
 // `knowledge.preset=` or `knowledge.vlm=` + `knowledge.model=`); the directions also in world
 // coordinates through the body stage's animal frame; and the metric scale (cm per scene unit).
 // Its files are KnowledgeOutputs below; `nf_gpu reconstruct --help-stage knowledge` lists its settings.
+#include <array>
 #include <string>
+
+#include <glm/glm.hpp>
 
 #include "engine/knowledge/knowledge.hpp"
 #include "engine/pipeline/stage.hpp"
@@ -39,6 +42,8 @@ inline constexpr const char* kVlmKeyVariable = "NF_VLM_API_KEY";
 
 // The scale a finished knowledge stage wrote (cm per scene unit).
 double read_metric_scale(const KnowledgeOutputs& outputs);
+// The regions' growth directions in world coordinates it wrote (unit; zero for a region it lacks).
+std::array<glm::vec3, body::kRegionCount> read_directions_world(const KnowledgeOutputs& outputs);
 
 class KnowledgeStage : public Stage {
  public:

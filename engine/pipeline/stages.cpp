@@ -6,6 +6,8 @@
 #include "engine/core/output_guard.hpp"
 #include "engine/core/text.hpp"
 #include "engine/pipeline/body_stage.hpp"
+#include "engine/pipeline/defur_stage.hpp"
+#include "engine/pipeline/frames_stage.hpp"
 #include "engine/pipeline/knowledge_stage.hpp"
 #include "engine/pipeline/neus_stage.hpp"
 
@@ -17,7 +19,9 @@ std::vector<std::unique_ptr<Stage>> reconstruction_stages() {
   stages.push_back(std::make_unique<NeusStage>());
   stages.push_back(std::make_unique<BodyStage>());
   stages.push_back(std::make_unique<KnowledgeStage>());
-  // Next, as they land: defur, frames, fur, export.
+  stages.push_back(std::make_unique<DefurStage>());
+  stages.push_back(std::make_unique<FramesStage>());
+  // Next, as they land: fur, export.
   return stages;
 }
 

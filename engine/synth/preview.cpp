@@ -147,8 +147,8 @@ PreviewResult render_previews(const PreviewOptions& o) {
   return result;
 }
 
-std::vector<fs::path> render_region_previews(const geometry::Mesh& mesh, const io::Scene& scene,
-                                            const std::vector<std::uint32_t>& views, const fs::path& out) {
+std::vector<io::Image> render_region_images(const geometry::Mesh& mesh, const io::Scene& scene,
+                                            const std::vector<std::uint32_t>& views) {
   geometry::Mesh body = mesh;
   if (body.normals.empty()) geometry::compute_vertex_normals(body);
   BodyLook look;
@@ -157,12 +157,20 @@ std::vector<fs::path> render_region_previews(const geometry::Mesh& mesh, const i
   RenderOptions options;
   options.samples_per_axis = 2;
   const StrandRenderer renderer(body, look, io::StrandSet{}, StrandLook{}, options);
+  std::vector<io::Image> images;
+  for (std::uint32_t v : views) images.push_back(renderer.render(scene.cameras[v]).rgb);
+  return images;
+}
+
+std::vector<fs::path> render_region_previews(const geometry::Mesh& mesh, const io::Scene& scene,
+                                            const std::vector<std::uint32_t>& views, const fs::path& out) {
+  const std::vector<io::Image> images = render_region_images(mesh, scene, views);
   const std::vector<std::string> names = io::view_file_names(scene, views);
   OutputFolder folder(out);
   std::vector<fs::path> files;
   for (std::size_t i = 0; i < views.size(); ++i) {
     files.push_back(folder.claim(names[i] + ".png"));
-    io::write_png(files.back(), renderer.render(scene.cameras[views[i]]).rgb);
+    io::write_png(files.back(), images[i]);
   }
   return files;
 }

@@ -26,6 +26,7 @@
 
 #include "engine/body/regions.hpp"
 #include "engine/geometry/mesh.hpp"
+#include "engine/io/image.hpp"
 #include "engine/io/scene.hpp"
 
 namespace nf::synth {
@@ -57,6 +58,9 @@ PreviewResult render_previews(const PreviewOptions& options);
 
 // A mesh shaded in its regions' palette colours (no strands) from the given cameras, written as
 // `<out>/<camera name>.png`: how a stage shows its labels to people. Returns the files.
+// The same renders, returned instead of written (sRGB, 3 channels), for a stage to compose.
+std::vector<io::Image> render_region_images(const geometry::Mesh& mesh, const io::Scene& scene,
+                                            const std::vector<std::uint32_t>& views);
 std::vector<std::filesystem::path> render_region_previews(const geometry::Mesh& mesh, const io::Scene& scene,
                                                           const std::vector<std::uint32_t>& views,
                                                           const std::filesystem::path& out);

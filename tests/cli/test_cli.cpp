@@ -357,7 +357,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   // The knowledge stage from a preset: the knowledge, world directions and the scale (the synth
   // scene declares its unit; the eyes' estimate is reported beside it).
   const Result known = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + body +
-                           " --set knowledge.preset=cat --json");
+                           " --set knowledge.preset=cat --to knowledge --json");
   INFO(known.output);
   REQUIRE(known.code == 0);
   const nf::json all = nf::json::parse(known.output.substr(known.output.find('[')));
@@ -371,6 +371,45 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   CHECK(ks["ground_truth"].contains("scale_from_eyes_error"));
   for (const char* f : {"knowledge/knowledge.json", "knowledge/directions_world.json", "knowledge/scale.json", "knowledge/metrics.json"})
     CHECK_MESSAGE(fs::exists(work / f), f);
+
+  // Defur and frames on the cached stages: M_bald inside M_NeuS, its files, the masks, the roots.
+  const std::string small = " --set defur.resolution=64 --set defur.preview_views=1 --set frames.roots=3000";
+  const Result framed = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + body +
+                            " --set knowledge.preset=cat" + small + " --json");
+  INFO(framed.output);
+  REQUIRE(framed.code == 0);
+  const nf::json five = nf::json::parse(framed.output.substr(framed.output.find('[')));
+  REQUIRE(five.size() == 5);
+  CHECK((five[2]["ran"] == false && five[3]["stage"] == "defur" && five[4]["stage"] == "frames"));
+  for (const char* f : {"defur/bald.ply", "defur/vertex_fur.npz", "defur/bald_sdf.npz", "defur/refit.ply", "defur/metrics.json",
+                        "defur/nonbald_masks/007.png", "defur/previews/000.png", "frames/frames.npz", "frames/roots.npz",
+                        "frames/metrics.json"})
+    CHECK_MESSAGE(fs::exists(work / f), f);
+  const nf::json& ds = five[3]["summary"];
+  CHECK(ds["masks"]["views"] == 8);
+  CHECK(ds["ground_truth"]["bald"]["chamfer_mm"]["mean"].get<double>() > 0.0);
+  const nf::geometry::Mesh bald = nf::io::read_mesh(work / "defur" / "bald.ply");
+  CHECK(bald.regions.size() == bald.vertex_count());
+  CHECK(bald.triangle_count() > 100);
+  const nf::json& fr = five[4]["summary"];
+  CHECK(fr["roots"] == 3000);
+  CHECK(fr["smoothness"]["mean_angle_deg"].get<double>() < 20.0);
+  CHECK(fr["ground_truth"]["strands_compared"].get<int>() > 100);
+  // Knowledge without any fur: defur still makes M_bald, frames finds no roots and says so.
+  const fs::path bald_knowledge = root / "bald_knowledge.json";
+  {
+    std::ifstream in(work / "knowledge" / "knowledge.json");
+    nf::json k = nf::json::parse(in);
+    for (auto& [name, region] : k["regions"].items()) region["length_cm"] = 0.0, region["thickness_cm"] = 0.0;
+    std::ofstream(bald_knowledge) << k.dump(2);
+  }
+  const Result hairless = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + body +
+                              " --set knowledge.file=" + bald_knowledge.string() + small + " --json");
+  INFO(hairless.output);
+  REQUIRE(hairless.code == 0);
+  CHECK(hairless.output.find("no region of the knowledge grows fur") != std::string::npos);
+  const nf::json none = nf::json::parse(hairless.output.substr(hairless.output.find('[')));
+  CHECK(none[4]["summary"]["roots"] == 0);
   // --scene-scale overrides the scene's unit; annotate prints the table; an edited file feeds back.
   const std::string annotate = "annotate --scene " + scene.string() + " --out " + work.string() + tiny + body;
   const Result scaled = run(annotate + " --set knowledge.preset=cat --scene-scale 50");
@@ -430,7 +469,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   // The README's tables are the ones the declarations make (regenerate them with --markdown).
   std::ifstream readme(NF_README);
   const std::string manual(std::istreambuf_iterator<char>(readme), {});
-  for (const std::string stage : {"neus", "body", "knowledge"}) {
+  for (const std::string stage : {"neus", "body", "knowledge", "defur", "frames"}) {
     const Result table = run("reconstruct --help-stage " + stage + " --markdown");
     CHECK_MESSAGE(manual.find("### `" + stage + "`\n\n" + table.output) != std::string::npos,
                   "README.md's " << stage << " settings table is stale: paste `nf_gpu reconstruct --help-stage " << stage

@@ -1,0 +1,191 @@
+#include "engine/pipeline/frames_stage.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "engine/core/atomic_file.hpp"
+#include "engine/core/error.hpp"
+#include "engine/core/log.hpp"
+#include "engine/fur/roots.hpp"
+#include "engine/geometry/point_index.hpp"
+#include "engine/geometry/tangent_field.hpp"
+#include "engine/io/ground_truth.hpp"
+#include "engine/io/mesh.hpp"
+#include "engine/io/npz.hpp"
+#include "engine/io/strand_files.hpp"
+#include "engine/pipeline/defur_stage.hpp"
+#include "engine/pipeline/knowledge_stage.hpp"
+
+namespace nf::pipeline {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr int kStageVersion = 1;
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+FramesSettings settings_of(const StageContext& c) {
+  return frames_settings().resolve(c.quality, c.settings.value("frames", json::object()));
+}
+
+glm::vec3 vertex(const geometry::Mesh& m, std::uint32_t v) {
+  return {m.positions[3 * std::size_t(v)], m.positions[3 * std::size_t(v) + 1], m.positions[3 * std::size_t(v) + 2]};
+}
+
+double angle_deg(glm::vec3 a, glm::vec3 b) {
+  const float la = glm::length(a), lb = glm::length(b);
+  if (!(la > 0 && lb > 0)) return 0;
+  return std::acos(std::clamp(double(glm::dot(a, b) / (la * lb)), -1.0, 1.0)) * 180.0 / M_PI;
+}
+
+// How well the field (and, for comparison, the knowledge's guide alone) points the way the
+// ground-truth strands grow: each strand's root direction (root to its 4th point), projected onto
+// the nearest face's plane, against that face's tangent.
+json growth_agreement(const StageContext& c, const geometry::Mesh& bald, const geometry::TangentField& field,
+                      const std::vector<glm::vec3>& guides) {
+  const std::optional<io::GroundTruth> gt = io::find_ground_truth(c.scene_dir);
+  if (!gt || !fs::exists(gt->strands())) return json();
+  const io::StrandSet strands = io::read_hair(gt->strands());
+  std::vector<float> centroids(3 * bald.triangle_count());
+  for (std::size_t f = 0; f < bald.triangle_count(); ++f) {
+    const glm::vec3 m = (vertex(bald, bald.triangles[3 * f]) + vertex(bald, bald.triangles[3 * f + 1]) + vertex(bald, bald.triangles[3 * f + 2])) / 3.f;
+    for (int a = 0; a < 3; ++a) centroids[3 * f + std::size_t(a)] = m[a];
+  }
+  const geometry::PointIndex index(centroids);
+  const std::uint32_t n = strands.strand_count(), step = std::max(1u, n / 20000);
+  double field_sum = 0, guide_sum = 0;
+  std::uint64_t count = 0, field_within_30 = 0, guide_count = 0;
+  for (std::uint32_t s = 0; s < n; s += step) {
+    if (strands.points_in(s) < 2) continue;
+    const std::size_t p0 = strands.offsets[s], p1 = p0 + std::min<std::size_t>(3, strands.points_in(s) - 1);
+    const glm::vec3 root(strands.points[3 * p0], strands.points[3 * p0 + 1], strands.points[3 * p0 + 2]);
+    const glm::vec3 tip(strands.points[3 * p1], strands.points[3 * p1 + 1], strands.points[3 * p1 + 2]);
+    const float q[3]{root.x, root.y, root.z};
+    const std::uint32_t f = index.nearest(q).first;
+    const glm::vec3 nrm = field.normal[f];
+    glm::vec3 d = tip - root;
+    d -= glm::dot(d, nrm) * nrm;
+    if (!(glm::length(d) > 0) || !(glm::length(field.tangent[f]) > 0)) continue;
+    const double a = angle_deg(field.tangent[f], d);
+    field_sum += a, field_within_30 += a <= 30.0, ++count;
+    glm::vec3 g = guides[f] - glm::dot(guides[f], nrm) * nrm;
+    if (glm::length(g) > 0) guide_sum += angle_deg(g, d), ++guide_count;
+  }
+  json out{{"reference", "gt/strands.hair"}, {"strands_compared", count}};
+  if (count) out["field_mean_angle_deg"] = field_sum / double(count), out["field_within_30_deg"] = double(field_within_30) / double(count);
+  if (guide_count) out["guide_mean_angle_deg"] = guide_sum / double(guide_count);
+  if (count) log::info("frames: the field is ", field_sum / double(count), " degrees from the ground truth's growth on average");
+  return out;
+}
+
+}  // namespace
+
+std::vector<fs::path> FramesStage::inputs(const StageContext& c) const {
+  const DefurOutputs d = defur_outputs(c.work);
+  std::vector<fs::path> files{d.bald(), d.vertex_fur(), knowledge_outputs(c.work).scale()};
+  if (const auto gt = io::find_ground_truth(c.scene_dir))
+    if (fs::exists(gt->strands())) files.push_back(gt->strands());
+  return files;
+}
+
+json FramesStage::parameters(const StageContext& c) const {
+  return {{"stage_version", kStageVersion}, {"settings", frames_settings().values(c.quality, c.settings.value("frames", json::object()))}};
+}
+
+json FramesStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) {
+  const FramesSettings s = settings_of(c);
+  const FramesOutputs out{out_dir};
+  const DefurOutputs d = defur_outputs(c.work);
+  const auto t_all = Clock::now();
+  json seconds = json::object();
+
+  auto t = Clock::now();
+  const geometry::Mesh bald = io::read_mesh(d.bald());
+  const defur::VertexFur fur = defur::read_vertex_fur(d.vertex_fur(), bald.vertex_count());
+  const double cm = read_metric_scale(knowledge_outputs(c.work));
+  seconds["read"] = since(t);
+
+  // Guides: the growing vertices' mean direction on faces that grow fur.
+  t = Clock::now();
+  const std::vector<std::uint8_t> growing = fur::fur_faces(bald, fur);
+  std::vector<glm::vec3> guides(bald.triangle_count(), glm::vec3(0.f));
+  if (s.guide)
+    for (std::size_t f = 0; f < guides.size(); ++f) {
+      if (!growing[f]) continue;
+      glm::vec3 sum(0.f);
+      for (int k = 0; k < 3; ++k) sum += fur.direction[bald.triangles[3 * f + std::size_t(k)]];
+      if (glm::length(sum) > 0) guides[f] = glm::normalize(sum);
+    }
+  geometry::TangentFieldOptions options;
+  options.smoothing_length = s.smoothing_cm / cm;
+  const geometry::TangentField field = geometry::smooth_tangent_field(bald, guides, options);
+  seconds["field"] = since(t);
+  const geometry::FieldSmoothness smooth = geometry::field_smoothness(bald, field.tangent);
+  // The guides alone (projected, normalised), for comparison: what the solve smooths.
+  std::vector<glm::vec3> projected(guides.size(), glm::vec3(0.f));
+  for (std::size_t f = 0; f < guides.size(); ++f) {
+    const glm::vec3 p = guides[f] - glm::dot(guides[f], field.normal[f]) * field.normal[f];
+    projected[f] = glm::length(p) > 1e-6f ? glm::normalize(p) : field.tangent[f];
+  }
+  const geometry::FieldSmoothness guide_smooth = geometry::field_smoothness(bald, projected);
+  log::info("frames: tangent field on ", bald.triangle_count(), " faces (", field.guided_faces, " guided) in ", field.solve_seconds,
+            " s; neighbours differ by ", smooth.mean_angle_deg, " degrees on average");
+
+  t = Clock::now();
+  const std::uint64_t nf = bald.triangle_count();
+  io::NpyWrite tangent{"tangent", {nf, 3}, "<f4", {}}, bitangent{"bitangent", {nf, 3}, "<f4", {}}, normal{"normal", {nf, 3}, "<f4", {}};
+  for (std::size_t f = 0; f < nf; ++f) {
+    const glm::vec3 b = glm::cross(field.normal[f], field.tangent[f]);
+    for (int a = 0; a < 3; ++a)
+      tangent.values.push_back(field.tangent[f][a]), bitangent.values.push_back(b[a]), normal.values.push_back(field.normal[f][a]);
+  }
+  io::write_npz(out.frames(), {tangent, bitangent, normal});
+  seconds["write_frames"] = since(t);
+
+  t = Clock::now();
+  const fur::Roots roots = fur::sample_roots(bald, {field.tangent, field.normal}, fur, std::uint64_t(s.roots), s.seed);
+  fur::write_roots(out.roots(), roots);
+  seconds["roots"] = since(t);
+  if (roots.size() == 0)
+    log::warn("frames: no region of the knowledge grows fur on M_bald, so there are no roots: the fur stage has nothing to grow");
+
+  double fur_area = 0;
+  for (std::size_t f = 0; f < nf; ++f)
+    if (growing[f]) {
+      const std::uint32_t* v = &bald.triangles[3 * f];
+      fur_area += 0.5 * double(glm::length(glm::cross(vertex(bald, v[1]) - vertex(bald, v[0]), vertex(bald, v[2]) - vertex(bald, v[0]))));
+    }
+  json summary{{"faces", nf},
+               {"guided_faces", field.guided_faces},
+               {"filled_faces", field.filled_faces},
+               {"fur_faces", std::count(growing.begin(), growing.end(), std::uint8_t(1))},
+               {"fur_area_cm2", fur_area * cm * cm},
+               {"smoothing_cm", s.smoothing_cm},
+               {"smoothness", geometry::to_json(smooth)},
+               {"guide_smoothness", geometry::to_json(guide_smooth)},
+               {"roots", roots.size()},
+               {"seconds", seconds}};
+  const json gt = growth_agreement(c, bald, field, guides);
+  if (!gt.is_null()) summary["ground_truth"] = gt;
+  summary["seconds_total"] = since(t_all);
+  write_file_atomic(out.metrics(), summary.dump(2) + "\n");
+  return summary;
+}
+
+const SettingsSchema<FramesSettings>& frames_settings() {
+  using F = FramesSettings;
+  static const SettingsSchema<F> schema = [] {
+    SettingsSchema<F> s("frames", [](const std::string&) { return F{}; });
+    s.add("smoothing_cm", [](F& f) -> auto& { return f.smoothing_cm; }, 0.01, 1000,
+          "how far (cm) a region's growth direction spreads before its neighbours' pull wins")
+        .add("guide", [](F& f) -> auto& { return f.guide; }, 0, 1,
+             "align the field with the knowledge's growth directions (else: the smoothest field)")
+        .add("roots", [](F& f) -> auto& { return f.roots; }, 0, 1e8, "fur roots written to roots.npz")
+        .add("seed", [](F& f) -> auto& { return f.seed; }, 0, 4294967295.0, "root sampling seed");
+    return s;
+  }();
+  return schema;
+}
+
+}  // namespace nf::pipeline
