@@ -17,8 +17,9 @@ struct BendingPush {
   float guard_fraction;
 };
 struct MeanPush {
-  std::uint32_t strands, bends;
+  std::uint32_t strands, bends, chunk, stage;
 };
+constexpr std::uint32_t kMeanChunk = 4096;  // strands one invocation sums (lavapipe cuts loops past 65,535)
 struct LossPush {
   std::uint32_t strands, points_per_strand;
   float guard_fraction;
@@ -64,6 +65,8 @@ void validate(gpu::Context& context, const StrandLossShape& shape, const SdfGrid
 StrandLossScratch::StrandLossScratch(gpu::Context& context, const StrandLossShape& shape)
     : theta(context, std::uint64_t(shape.strands) * (shape.points_per_strand - 2), "bending angles"),
       mean(context, shape.points_per_strand - 2, "mean bending angles"),
+      mean_partial(context, std::uint64_t((shape.strands + kMeanChunk - 1) / kMeanChunk) * (shape.points_per_strand - 2),
+                   "bending angle sums per chunk"),
       partial(context, std::uint64_t(shape.strands) * 3, "strand loss sums") {}
 
 void strand_losses_forward(gpu::Stream& stream, const StrandLossBatch& b, StrandLossScratch& scratch) {
@@ -72,8 +75,12 @@ void strand_losses_forward(gpu::Stream& stream, const StrandLossBatch& b, Strand
   const std::uint32_t bends = b.shape.points_per_strand - 2;
   stream.dispatch(context.kernel("fur/strand_bending", {{0, kWorkgroup}}), {b.points, b.lengths, scratch.theta},
                   BendingPush{b.shape.strands, b.shape.points_per_strand, float(kSegmentGuardFraction)}, gpu::Elements(b.shape.strands));
-  stream.dispatch(context.kernel("fur/strand_bending_mean", {{0, kWorkgroup}}), {scratch.theta, scratch.mean},
-                  MeanPush{b.shape.strands, bends}, gpu::Elements(bends));
+  const gpu::Kernel& mean = context.kernel("fur/strand_bending_mean", {{0, kWorkgroup}});
+  const std::uint32_t chunks = (b.shape.strands + kMeanChunk - 1) / kMeanChunk;
+  stream.dispatch(mean, {scratch.theta, scratch.mean_partial, scratch.mean}, MeanPush{b.shape.strands, bends, kMeanChunk, 0},
+                  gpu::Elements(std::uint64_t(chunks) * bends));
+  stream.dispatch(mean, {scratch.theta, scratch.mean_partial, scratch.mean}, MeanPush{b.shape.strands, bends, kMeanChunk, 1},
+                  gpu::Elements(bends));
   stream.dispatch(context.kernel("fur/strand_losses_fwd", {{0, kWorkgroup}}),
                   {b.points, b.guides, b.lengths, scratch.theta, scratch.mean, b.sdf, scratch.partial}, loss_push(b),
                   gpu::Elements(b.shape.strands));

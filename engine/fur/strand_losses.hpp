@@ -29,10 +29,11 @@ struct StrandLossBatch {
   gpu::BufferRange points, guides, lengths, sdf;  // N L 3, N 3 (unit), N, the grid's values
 };
 
-// Scratch of one batch size: the bending angles, their mean, the per-strand sums.
+// Scratch of one batch size: the bending angles, their mean (and its per-chunk sums), the
+// per-strand loss sums.
 struct StrandLossScratch {
   StrandLossScratch(gpu::Context& context, const StrandLossShape& shape);
-  gpu::Buffer<float> theta, mean, partial;
+  gpu::Buffer<float> theta, mean, mean_partial, partial;
 };
 
 // Records the bending angles, their batch mean and the per-strand sums.

@@ -1,6 +1,7 @@
 #include "engine/gradcheck/catalog.hpp"
 
 #include "engine/fur/strand_geometry_gradcheck.hpp"
+#include "engine/fur/strand_chamfer_gradcheck.hpp"
 #include "engine/fur/strand_losses_gradcheck.hpp"
 #include "engine/nn/encoding_gradcheck.hpp"
 #include "engine/nn/loss_gradcheck.hpp"
@@ -24,6 +25,7 @@ std::vector<std::unique_ptr<DifferentiableKernel>> all_kernels() {
   kernels.push_back(neus::make_volume_render_check());
   kernels.push_back(fur::make_strand_geometry_check());
   kernels.push_back(fur::make_strand_losses_check());
+  kernels.push_back(fur::make_strand_chamfer_check());
   return kernels;
 }
 

@@ -113,3 +113,26 @@ TEST_CASE("strand losses refuse bad batches, naming them") {
                                      std::vector<float>(10)),
                        doctest::Contains("SDF grid"), InputError);
 }
+
+TEST_CASE("strand losses: the curvature mean holds over 100000 strands (past lavapipe's loop limit)") {
+  const Plane plane;
+  const StrandLossShape shape{100000, 4};
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-1.f, 1.f);
+  std::vector<float> points, guides, lengths;
+  for (std::uint32_t s = 0; s < shape.strands; ++s) {
+    glm::vec3 p(0.5f * u(rng), 0.5f * u(rng), 0.5f), d(0, 0, 1);
+    for (std::uint32_t k = 0; k < 4; ++k) {
+      points.insert(points.end(), {p.x, p.y, p.z});
+      d = glm::normalize(d + (s < 50000 ? 0.05f : 0.6f) * glm::vec3(u(rng), u(rng), 0.f));  // two populations
+      p += 0.01f * d;
+    }
+    guides.insert(guides.end(), {0.f, 0.f, 1.f});
+    lengths.push_back(0.03f);
+  }
+  const auto gpu = strand_losses(test::context(), shape, plane.grid, points, guides, lengths, plane.values);
+  const auto ref = strand_losses_ref<double>(std::vector<double>(points.begin(), points.end()), std::vector<double>(guides.begin(), guides.end()),
+                                             std::vector<double>(lengths.begin(), lengths.end()), plane.grid,
+                                             std::vector<double>(plane.values.begin(), plane.values.end()), shape);
+  CHECK(gpu[1] == doctest::Approx(ref[1]).epsilon(1e-3));
+}
