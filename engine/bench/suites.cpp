@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "engine/bench/body_suite.hpp"
+#include "engine/bench/fur_suite.hpp"
 #include "engine/bench/core_suite.hpp"
 #include "engine/bench/neus_suite.hpp"
 #include "engine/bench/nn_suite.hpp"
@@ -14,7 +15,7 @@
 
 namespace nf::bench {
 
-std::vector<std::string> suite_names() { return {"core", "nn", "splat", "neus", "body"}; }
+std::vector<std::string> suite_names() { return {"core", "nn", "splat", "neus", "body", "fur"}; }
 
 json run_suite(gpu::Context& context, const Options& options) {
   if (options.suite == "core") return run_core_suite(context, options);
@@ -22,6 +23,7 @@ json run_suite(gpu::Context& context, const Options& options) {
   if (options.suite == "splat") return run_splat_suite(context, options);
   if (options.suite == "neus") return run_neus_suite(context, options);
   if (options.suite == "body") return run_body_suite(context, options);
+  if (options.suite == "fur") return run_fur_suite(context, options);
   throw UsageError("unknown bench suite '" + options.suite + "'");
 }
 
