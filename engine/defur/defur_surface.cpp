@@ -1,13 +1,12 @@
 #include "engine/defur/defur_surface.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
-#include <limits>
 #include <sstream>
 
 #include "engine/body/regions.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/stopwatch.hpp"
 #include "engine/core/parallel.hpp"
 #include "engine/geometry/closest_point.hpp"
 #include "engine/geometry/marching_cubes_gpu.hpp"
@@ -16,21 +15,6 @@
 
 namespace nf::defur {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
-glm::vec3 vertex(const geometry::Mesh& m, std::uint32_t v) {
-  return {m.positions[3 * std::size_t(v)], m.positions[3 * std::size_t(v) + 1], m.positions[3 * std::size_t(v) + 2]};
-}
-
-double box_diagonal(const geometry::Mesh& m) {
-  if (m.vertex_count() == 0) return 0;
-  glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
-  for (std::size_t v = 0; v < m.vertex_count(); ++v) lo = glm::min(lo, vertex(m, std::uint32_t(v))), hi = glm::max(hi, vertex(m, std::uint32_t(v)));
-  return glm::length(hi - lo);
-}
 
 std::string in_cm(double units, double cm_per_unit) {
   std::ostringstream s;
@@ -64,32 +48,30 @@ DefurResult defur_surface(gpu::Context& gpu, const geometry::Mesh& labelled, con
   if (labelled.regions.size() != labelled.vertex_count())
     throw InputError(source + ": the mesh has no region per vertex (run the body stage)");
   DefurResult result;
-  auto t = Clock::now();
+  Stopwatch t;
   geometry::Mesh outer = labelled;
   result.outer_repair = geometry::repair_mesh(outer, options.max_hole_edges);
   if (outer.triangle_count() == 0) throw InputError(source + ": no usable faces");
   const std::vector<float> thickness = vertex_thickness(outer, knowledge, options.cm_per_unit, options.thickness_smoothing, source);
-  result.seconds["clean_and_thickness"] = since(t);
-  t = Clock::now();
+  result.seconds["clean_and_thickness"] = t.seconds();
+  t.restart();
   const float max_s = thickness.empty() ? 0.f : *std::max_element(thickness.begin(), thickness.end());
-  const double diagonal = box_diagonal(outer);  // its main part: the repair kept the largest component
+  const double diagonal = geometry::mesh_bounds(outer).diagonal();  // its main part: the repair kept the largest component
   geometry::SdfOptions sdf_options;
   sdf_options.resolution = options.resolution;
   {
     // The band holds the shrunken surface with room for the extraction around it.
-    glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
-    for (std::size_t v = 0; v < outer.vertex_count(); ++v) lo = glm::min(lo, vertex(outer, std::uint32_t(v))), hi = glm::max(hi, vertex(outer, std::uint32_t(v)));
-    const glm::vec3 e = hi - lo;
-    const float voxel = std::max({e.x, e.y, e.z}) / float(std::max(options.resolution - 1, 1));
+    const float longest = geometry::mesh_bounds(outer).longest();
+    const float voxel = longest / float(std::max(options.resolution - 1, 1));
     // Nothing lies deeper than half the longest side: a thicker fur needs no wider band (and is
     // refused below, naming its region).
-    sdf_options.band = std::min(max_s, 0.5f * std::max({e.x, e.y, e.z})) + 3 * voxel;
+    sdf_options.band = std::min(max_s, 0.5f * longest) + 3 * voxel;
   }
   const geometry::SignedDistanceGrid sdf = geometry::signed_distance_grid(outer, sdf_options, source);
   result.grid = sdf.grid, result.band = sdf.band, result.sign = sdf.sign;
-  result.seconds["sdf"] = since(t);
+  result.seconds["sdf"] = t.seconds();
 
-  t = Clock::now();
+  t.restart();
   const geometry::GridSpec& g = sdf.grid;
   std::vector<float> field(g.size());
   std::vector<std::uint8_t> nearest_region(g.size(), 255);
@@ -104,8 +86,8 @@ DefurResult defur_surface(gpu::Context& gpu, const geometry::Mesh& labelled, con
             continue;
           }
           const std::uint32_t* v = &outer.triangles[3 * std::size_t(tri)];
-          const geometry::TrianglePoint cp = geometry::closest_point_on_triangle(g.position(i, j, int(k)), vertex(outer, v[0]),
-                                                                                 vertex(outer, v[1]), vertex(outer, v[2]));
+          const geometry::TrianglePoint cp = geometry::closest_point_on_triangle(g.position(i, j, int(k)), outer.position(v[0]),
+                                                                                 outer.position(v[1]), outer.position(v[2]));
           const glm::vec3& b = cp.barycentric;
           field[n] = sdf.distance[n] + b.x * thickness[v[0]] + b.y * thickness[v[1]] + b.z * thickness[v[2]];
           const int m = b.x >= b.y && b.x >= b.z ? 0 : b.y >= b.z ? 1 : 2;
@@ -124,17 +106,17 @@ DefurResult defur_surface(gpu::Context& gpu, const geometry::Mesh& labelled, con
     if (present[std::size_t(r)])
       result.regions.push_back({r, region_thickness[std::size_t(r)], depth[std::size_t(r)],
                                 region_thickness[std::size_t(r)] > 0 && region_thickness[std::size_t(r)] >= depth[std::size_t(r)]});
-  result.seconds["shrink"] = since(t);
+  result.seconds["shrink"] = t.seconds();
 
-  t = Clock::now();
+  t.restart();
   result.bald = geometry::marching_cubes_gpu(gpu, field, g.dims, g.origin, glm::vec3(g.voxel), 0.f);
   result.extracted_faces = result.bald.triangle_count();
-  result.seconds["marching_cubes"] = since(t);
+  result.seconds["marching_cubes"] = t.seconds();
 
-  t = Clock::now();
+  t.restart();
   if (result.bald.triangle_count() > 0) result.repair = geometry::repair_mesh(result.bald, options.max_hole_edges);
-  result.seconds["repair"] = since(t);
-  const double kept = box_diagonal(result.bald);
+  result.seconds["repair"] = t.seconds();
+  const double kept = geometry::mesh_bounds(result.bald).diagonal();
   if (!(kept >= 0.5 * diagonal)) {
     std::vector<RegionDepth> culprits;
     for (const RegionDepth& r : result.regions)
@@ -152,7 +134,7 @@ DefurResult defur_surface(gpu::Context& gpu, const geometry::Mesh& labelled, con
                      " of the body: " + what + ". Lower thickness_cm in the knowledge (knowledge.json) or check the metric scale");
   }
 
-  t = Clock::now();
+  t.restart();
   result.decimation = geometry::decimate(result.bald, options.target_faces);
   if (result.decimation.faces_after < result.decimation.faces_before) {
     // Edge collapses can pinch a vertex or fold a sliver: repair once more.
@@ -162,7 +144,7 @@ DefurResult defur_surface(gpu::Context& gpu, const geometry::Mesh& labelled, con
     result.repair.holes_left += again.holes_left, result.repair.components_dropped += again.components_dropped;
   }
   geometry::compute_vertex_normals(result.bald);
-  result.seconds["decimate"] = since(t);
+  result.seconds["decimate"] = t.seconds();
   return result;
 }
 

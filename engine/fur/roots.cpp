@@ -8,14 +8,6 @@
 #include "engine/io/npz.hpp"
 
 namespace nf::fur {
-namespace {
-
-glm::vec3 vertex(const geometry::Mesh& m, std::uint32_t v) {
-  return {m.positions[3 * std::size_t(v)], m.positions[3 * std::size_t(v) + 1], m.positions[3 * std::size_t(v) + 2]};
-}
-
-}  // namespace
-
 std::vector<std::uint8_t> fur_faces(const geometry::Mesh& mesh, const defur::VertexFur& fur) {
   NF_CHECK(fur.size() == mesh.vertex_count(), "fur_faces: knowledge per vertex");
   std::vector<std::uint8_t> out(mesh.triangle_count(), 0);
@@ -37,7 +29,7 @@ Roots sample_roots(const geometry::Mesh& mesh, const FaceFrames& frames, const d
     double area = 0;
     if (growing[f]) {
       const std::uint32_t* v = &mesh.triangles[3 * f];
-      area = 0.5 * double(glm::length(glm::cross(vertex(mesh, v[1]) - vertex(mesh, v[0]), vertex(mesh, v[2]) - vertex(mesh, v[0]))));
+      area = 0.5 * double(glm::length(glm::cross(mesh.position(v[1]) - mesh.position(v[0]), mesh.position(v[2]) - mesh.position(v[0]))));
       if (!std::isfinite(area) || glm::length(frames.tangent[f]) == 0.f) area = 0;
     }
     cumulative[f + 1] = cumulative[f] + area;
@@ -80,7 +72,7 @@ Roots sample_roots(const geometry::Mesh& mesh, const FaceFrames& frames, const d
     const float dl = glm::length(direction);
     roots.face.push_back(std::uint32_t(f));
     roots.barycentric.push_back(b);
-    roots.position.push_back(b.x * vertex(mesh, v[0]) + b.y * vertex(mesh, v[1]) + b.z * vertex(mesh, v[2]));
+    roots.position.push_back(b.x * mesh.position(v[0]) + b.y * mesh.position(v[1]) + b.z * mesh.position(v[2]));
     roots.tangent.push_back(frames.tangent[f]);
     roots.normal.push_back(frames.normal[f]);
     roots.bitangent.push_back(glm::cross(frames.normal[f], frames.tangent[f]));

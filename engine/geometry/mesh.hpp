@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include <glm/glm.hpp>
+
 namespace nf::geometry {
 
 struct Mesh {
@@ -16,6 +18,7 @@ struct Mesh {
 
   std::uint64_t vertex_count() const { return positions.size() / 3; }
   std::uint64_t triangle_count() const { return triangles.size() / 3; }
+  glm::vec3 position(std::uint64_t v) const { return {positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]}; }
   // Throws InputError naming `source` and the inconsistent field (sizes, indices, NaN/Inf).
   void validate(const std::string& source) const;
 };

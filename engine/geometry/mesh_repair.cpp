@@ -14,10 +14,6 @@
 namespace nf::geometry {
 namespace {
 
-glm::vec3 vertex(const Mesh& m, std::uint32_t v) {
-  return {m.positions[3 * std::size_t(v)], m.positions[3 * std::size_t(v) + 1], m.positions[3 * std::size_t(v) + 2]};
-}
-
 std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
   return a < b ? (std::uint64_t(a) << 32) | b : (std::uint64_t(b) << 32) | a;
 }
@@ -70,7 +66,7 @@ RepairReport repair_mesh(Mesh& mesh, std::uint32_t max_hole_edges) {
   for (std::size_t f = 0; f < nf; ++f) {
     const std::uint32_t a = mesh.triangles[3 * f], b = mesh.triangles[3 * f + 1], c = mesh.triangles[3 * f + 2];
     const bool degenerate = a == b || b == c || a == c ||
-                            glm::length(glm::cross(vertex(mesh, b) - vertex(mesh, a), vertex(mesh, c) - vertex(mesh, a))) == 0;
+                            glm::length(glm::cross(mesh.position(b) - mesh.position(a), mesh.position(c) - mesh.position(a))) == 0;
     if (degenerate) keep[f] = 0, ++report.degenerate_faces;
   }
   // Duplicates (any order or winding of the same three vertices).
@@ -136,7 +132,7 @@ RepairReport repair_mesh(Mesh& mesh, std::uint32_t max_hole_edges) {
     glm::vec3 centre(0.f);
     std::map<std::int32_t, int> votes;
     for (const auto& [a, b] : loop) {
-      centre += vertex(mesh, a);
+      centre += mesh.position(a);
       if (!mesh.regions.empty()) ++votes[mesh.regions[a]];
     }
     centre /= float(loop.size());

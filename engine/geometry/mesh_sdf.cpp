@@ -7,13 +7,11 @@
 #include "engine/core/error.hpp"
 #include "engine/core/parallel.hpp"
 #include "engine/geometry/closest_point.hpp"
+#include "engine/geometry/mesh_tools.hpp"
 
 namespace nf::geometry {
 namespace {
 
-glm::vec3 vertex(const Mesh& m, std::uint32_t v) {
-  return {m.positions[3 * std::size_t(v)], m.positions[3 * std::size_t(v) + 1], m.positions[3 * std::size_t(v) + 2]};
-}
 
 struct Crossing {
   float position;  // along the line, in samples
@@ -94,7 +92,7 @@ std::vector<std::uint8_t> winding_inside(const Mesh& mesh, const GridSpec& grid,
   std::vector<std::uint8_t> in_votes(n, 0), out_votes(n, 0);
   std::vector<glm::dvec3> g(mesh.vertex_count());
   for (std::size_t v = 0; v < g.size(); ++v)
-    g[v] = (glm::dvec3(vertex(mesh, std::uint32_t(v))) - glm::dvec3(grid.origin)) / double(grid.voxel);
+    g[v] = (glm::dvec3(mesh.position(v)) - glm::dvec3(grid.origin)) / double(grid.voxel);
   SignStats local;
   for (int axis = 0; axis < 3; ++axis) {
     const int b = (axis + 1) % 3, c = (axis + 2) % 3;
@@ -147,28 +145,23 @@ std::vector<std::uint8_t> winding_inside(const Mesh& mesh, const GridSpec& grid,
 SignedDistanceGrid signed_distance_grid(const Mesh& mesh, const SdfOptions& options, const std::string& source) {
   mesh.validate(source);
   if (mesh.triangle_count() == 0) throw InputError(source + ": the mesh has no triangles");
-  glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
-  for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
-    lo = glm::min(lo, vertex(mesh, std::uint32_t(v)));
-    hi = glm::max(hi, vertex(mesh, std::uint32_t(v)));
-  }
-  const glm::vec3 extent = hi - lo;
-  const float longest = std::max({extent.x, extent.y, extent.z});
+  const Bounds box = mesh_bounds(mesh);
+  const float longest = box.longest();
   if (!(longest > 0)) throw InputError(source + ": the mesh has no extent");
   if (options.resolution < 4) throw InputError(source + ": grid resolution must be at least 4");
   const float voxel = longest / float(options.resolution - 1);
   SignedDistanceGrid out;
   out.band = options.band > 0 ? options.band : 3 * voxel;
   const float padding = options.padding >= 0 ? options.padding : out.band + 2 * voxel;
-  out.grid = grid_around(lo, hi, options.resolution, padding);
+  out.grid = grid_around(box.lo, box.hi, options.resolution, padding);
   const GridSpec& g = out.grid;
   const std::size_t n = g.size();
   std::vector<float> dist(n, std::numeric_limits<float>::infinity());
   out.closest.assign(n, kNoTriangle);
 
   const auto measure = [&](std::size_t s, glm::vec3 p, std::uint32_t t) {
-    const glm::vec3 a = vertex(mesh, mesh.triangles[3 * std::size_t(t)]), b = vertex(mesh, mesh.triangles[3 * std::size_t(t) + 1]),
-                    c = vertex(mesh, mesh.triangles[3 * std::size_t(t) + 2]);
+    const glm::vec3 a = mesh.position(mesh.triangles[3 * std::size_t(t)]), b = mesh.position(mesh.triangles[3 * std::size_t(t) + 1]),
+                    c = mesh.position(mesh.triangles[3 * std::size_t(t) + 2]);
     const float d = glm::length(p - closest_point_on_triangle(p, a, b, c).point);
     if (d < dist[s] && d <= out.band) dist[s] = d, out.closest[s] = t;
   };
@@ -179,7 +172,7 @@ SignedDistanceGrid signed_distance_grid(const Mesh& mesh, const SdfOptions& opti
   for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
     glm::vec3 tl(std::numeric_limits<float>::max()), th(-std::numeric_limits<float>::max());
     for (int k = 0; k < 3; ++k) {
-      const glm::vec3 q = (vertex(mesh, mesh.triangles[3 * t + std::size_t(k)]) - g.origin) / g.voxel;
+      const glm::vec3 q = (mesh.position(mesh.triangles[3 * t + std::size_t(k)]) - g.origin) / g.voxel;
       tl = glm::min(tl, q), th = glm::max(th, q);
     }
     box_lo[t] = glm::max(glm::ivec3(glm::floor(tl)) - 1, glm::ivec3(0));
@@ -228,8 +221,8 @@ SignedDistanceGrid signed_distance_grid(const Mesh& mesh, const SdfOptions& opti
           bool in = inside[s] == 1;
           if (inside[s] == 2 && out.closest[s] != kNoTriangle) {  // a tie: the closest face's side
             const std::size_t t = out.closest[s];
-            const glm::vec3 a = vertex(mesh, mesh.triangles[3 * t]), b = vertex(mesh, mesh.triangles[3 * t + 1]),
-                            c = vertex(mesh, mesh.triangles[3 * t + 2]);
+            const glm::vec3 a = mesh.position(mesh.triangles[3 * t]), b = mesh.position(mesh.triangles[3 * t + 1]),
+                            c = mesh.position(mesh.triangles[3 * t + 2]);
             const glm::vec3 p = g.position(i, j, int(k));
             in = glm::dot(p - closest_point_on_triangle(p, a, b, c).point, glm::cross(b - a, c - a)) < 0;
           }

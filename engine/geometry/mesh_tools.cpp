@@ -109,6 +109,14 @@ void compute_vertex_normals(geometry::Mesh& mesh) {
   }
 }
 
+Bounds mesh_bounds(const geometry::Mesh& mesh) {
+  Bounds b;
+  if (mesh.vertex_count() == 0) return b;
+  b.lo = b.hi = mesh.position(0);
+  for (std::uint64_t v = 1; v < mesh.vertex_count(); ++v) b.lo = glm::min(b.lo, mesh.position(v)), b.hi = glm::max(b.hi, mesh.position(v));
+  return b;
+}
+
 bool is_closed_manifold(const geometry::Mesh& mesh) {
   const std::uint64_t nv = mesh.vertex_count();
   const std::size_t nt = mesh.triangle_count();

@@ -1,6 +1,10 @@
 #pragma once
-// Small triangle-mesh utilities: connected components, vertex normals, a closed-manifold check.
+// Small triangle-mesh utilities: connected components, vertex normals, the bounding box, a
+// closed-manifold check.
+#include <algorithm>
 #include <cstddef>
+
+#include <glm/glm.hpp>
 
 #include "engine/geometry/mesh.hpp"
 
@@ -16,6 +20,14 @@ std::size_t keep_largest_component(geometry::Mesh& mesh);
 // products, normalised). A vertex without any face of non-zero area gets (0, 0, 0).
 void compute_vertex_normals(geometry::Mesh& mesh);
 
+// The box of a mesh's vertices (lo = hi = 0 for a mesh without vertices).
+struct Bounds {
+  glm::vec3 lo{0.f}, hi{0.f};
+  glm::vec3 extent() const { return hi - lo; }
+  float longest() const { return std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}); }
+  float diagonal() const { return glm::length(hi - lo); }
+};
+Bounds mesh_bounds(const geometry::Mesh& mesh);
 // True when every undirected edge is used by exactly two triangles, once in each direction
 // (consistent orientation), no triangle repeats a vertex, and the triangles around every used
 // vertex form a single fan (no pinched vertices). An empty mesh is closed.

@@ -1,24 +1,21 @@
 #include "engine/geometry/tangent_field.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <complex>
 #include <deque>
-#include <limits>
 #include <unordered_map>
 
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
 
 #include "engine/core/error.hpp"
+#include "engine/core/stopwatch.hpp"
+#include "engine/geometry/mesh_tools.hpp"
 
 namespace nf::geometry {
 namespace {
 
-glm::dvec3 vertex(const Mesh& m, std::uint32_t v) {
-  return {m.positions[3 * std::size_t(v)], m.positions[3 * std::size_t(v) + 1], m.positions[3 * std::size_t(v) + 2]};
-}
 
 struct FaceEdge {
   std::uint32_t f, g;   // the two faces
@@ -57,8 +54,8 @@ struct FaceBasis {
 std::vector<FaceBasis> face_bases(const Mesh& mesh) {
   std::vector<FaceBasis> out(mesh.triangle_count());
   for (std::size_t f = 0; f < out.size(); ++f) {
-    const glm::dvec3 a = vertex(mesh, mesh.triangles[3 * f]), b = vertex(mesh, mesh.triangles[3 * f + 1]),
-                     c = vertex(mesh, mesh.triangles[3 * f + 2]);
+    const glm::dvec3 a = glm::dvec3(mesh.position(mesh.triangles[3 * f])), b = glm::dvec3(mesh.position(mesh.triangles[3 * f + 1])),
+                     c = glm::dvec3(mesh.position(mesh.triangles[3 * f + 2]));
     const glm::dvec3 cr = glm::cross(b - a, c - a);
     const double len = glm::length(cr);
     if (!(len > 0) || !(glm::length(b - a) > 0)) continue;
@@ -86,16 +83,14 @@ TangentField smooth_tangent_field(const Mesh& mesh, std::span<const glm::vec3> g
   for (std::size_t f = 0; f < nf; ++f)
     if (!std::isfinite(guides[f].x) || !std::isfinite(guides[f].y) || !std::isfinite(guides[f].z))
       throw InputError("tangent field: the guide of face " + std::to_string(f) + " is not finite");
-  const auto t0 = std::chrono::steady_clock::now();
+  const Stopwatch clock;
   TangentField out;
   out.tangent.assign(nf, glm::vec3(0.f));
   out.normal.assign(nf, glm::vec3(0.f));
   if (nf == 0) return out;
   const std::vector<FaceBasis> basis = face_bases(mesh);
   const std::vector<FaceEdge> edges = face_adjacency(mesh);
-  glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
-  for (std::size_t v = 0; v < mesh.vertex_count(); ++v) lo = glm::min(lo, vertex(mesh, std::uint32_t(v))), hi = glm::max(hi, vertex(mesh, std::uint32_t(v)));
-  const double length = options.smoothing_length > 0 ? options.smoothing_length : 0.02 * glm::length(hi - lo);
+  const double length = options.smoothing_length > 0 ? options.smoothing_length : 0.02 * double(mesh_bounds(mesh).diagonal());
   if (!(length > 0) || !std::isfinite(length)) throw InputError("tangent field: the smoothing length must be positive");
 
   double mean_area = 0;
@@ -112,7 +107,7 @@ TangentField smooth_tangent_field(const Mesh& mesh, std::span<const glm::vec3> g
   for (const FaceEdge& e : edges) {
     const FaceBasis &f = basis[e.f], &g = basis[e.g];
     if (f.area <= 0 || g.area <= 0) continue;
-    const glm::dvec3 d = vertex(mesh, e.b) - vertex(mesh, e.a);
+    const glm::dvec3 d = glm::dvec3(mesh.position(e.b)) - glm::dvec3(mesh.position(e.a));
     const double theta_f = std::atan2(glm::dot(d, f.e2), glm::dot(d, f.e1));
     const double theta_g = std::atan2(glm::dot(d, g.e2), glm::dot(d, g.e1));
     const double c = std::cos(theta_g - theta_f), s = std::sin(theta_g - theta_f);
@@ -184,33 +179,11 @@ TangentField smooth_tangent_field(const Mesh& mesh, std::span<const glm::vec3> g
     out.tangent[f] = glm::vec3(t);
     known[f] = 1;
   }
-  // Breadth-first fill across shared edges.
+  // Breadth-first fill across shared edges, first from every face the solve gave a direction.
   std::vector<std::vector<std::uint32_t>> around(nf);
   for (std::size_t k = 0; k < edges.size(); ++k) around[edges[k].f].push_back(std::uint32_t(k)), around[edges[k].g].push_back(std::uint32_t(k));
   std::deque<std::uint32_t> queue;
-  for (std::uint32_t f = 0; f < nf; ++f)
-    if (known[f]) queue.push_back(f);
-  while (!queue.empty()) {
-    const std::uint32_t f = queue.front();
-    queue.pop_front();
-    for (std::uint32_t k : around[f]) {
-      const FaceEdge& e = edges[k];
-      const std::uint32_t g = e.f == f ? e.g : e.f;
-      if (known[g] || basis[g].area <= 0) continue;
-      const glm::dvec3 t = carry(glm::dvec3(out.tangent[f]), basis[f], basis[g], vertex(mesh, e.b) - vertex(mesh, e.a));
-      if (!(glm::length(t) > 0)) continue;
-      out.tangent[g] = glm::vec3(glm::normalize(t));
-      known[g] = 1, ++out.filled_faces;
-      queue.push_back(g);
-    }
-  }
-  // Components the solve left without any direction (no guide reached them): seed one face with
-  // its first edge and carry it on, so the component is still consistent.
-  for (std::uint32_t seed = 0; seed < nf; ++seed) {
-    if (known[seed] || basis[seed].area <= 0) continue;
-    out.tangent[seed] = glm::vec3(basis[seed].e1);
-    known[seed] = 1, ++out.filled_faces;
-    queue.push_back(seed);
+  const auto spread = [&] {
     while (!queue.empty()) {
       const std::uint32_t f = queue.front();
       queue.pop_front();
@@ -218,15 +191,27 @@ TangentField smooth_tangent_field(const Mesh& mesh, std::span<const glm::vec3> g
         const FaceEdge& e = edges[k];
         const std::uint32_t g = e.f == f ? e.g : e.f;
         if (known[g] || basis[g].area <= 0) continue;
-        const glm::dvec3 t = carry(glm::dvec3(out.tangent[f]), basis[f], basis[g], vertex(mesh, e.b) - vertex(mesh, e.a));
+        const glm::dvec3 t = carry(glm::dvec3(out.tangent[f]), basis[f], basis[g], glm::dvec3(mesh.position(e.b)) - glm::dvec3(mesh.position(e.a)));
         if (!(glm::length(t) > 0)) continue;
         out.tangent[g] = glm::vec3(glm::normalize(t));
         known[g] = 1, ++out.filled_faces;
         queue.push_back(g);
       }
     }
+  };
+  for (std::uint32_t f = 0; f < nf; ++f)
+    if (known[f]) queue.push_back(f);
+  spread();
+  // Components the solve left without any direction (no guide reached them): seed one face with
+  // its first edge and carry it on, so the component is still consistent.
+  for (std::uint32_t seed = 0; seed < nf; ++seed) {
+    if (known[seed] || basis[seed].area <= 0) continue;
+    out.tangent[seed] = glm::vec3(basis[seed].e1);
+    known[seed] = 1, ++out.filled_faces;
+    queue.push_back(seed);
+    spread();
   }
-  out.solve_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  out.solve_seconds = clock.seconds();
   return out;
 }
 
@@ -239,7 +224,7 @@ FieldSmoothness field_smoothness(const Mesh& mesh, const std::vector<glm::vec3>&
   for (const FaceEdge& e : face_adjacency(mesh)) {
     if (basis[e.f].area <= 0 || basis[e.g].area <= 0) continue;
     if (!(glm::length(tangent[e.f]) > 0) || !(glm::length(tangent[e.g]) > 0)) continue;
-    const glm::dvec3 t = carry(glm::dvec3(tangent[e.f]), basis[e.f], basis[e.g], vertex(mesh, e.b) - vertex(mesh, e.a));
+    const glm::dvec3 t = carry(glm::dvec3(tangent[e.f]), basis[e.f], basis[e.g], glm::dvec3(mesh.position(e.b)) - glm::dvec3(mesh.position(e.a)));
     const double c = glm::dot(glm::normalize(t), glm::normalize(glm::dvec3(tangent[e.g])));
     angles.push_back(std::acos(std::clamp(c, -1.0, 1.0)) * 180.0 / M_PI);
   }

@@ -1,17 +1,18 @@
 #include "engine/pipeline/defur_stage.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
 #include "engine/body/region_transfer.hpp"
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/stopwatch.hpp"
 #include "engine/core/log.hpp"
 #include "engine/defur/defur_surface.hpp"
 #include "engine/defur/nonbald_masks.hpp"
 #include "engine/defur/sdf_file.hpp"
 #include "engine/defur/vertex_fur.hpp"
+#include "engine/geometry/mesh_tools.hpp"
 #include "engine/io/ground_truth.hpp"
 #include "engine/io/mesh.hpp"
 #include "engine/io/view_names.hpp"
@@ -26,23 +27,9 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr int kStageVersion = 1;
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 DefurSettings settings_of(const StageContext& c) {
   return defur_settings().resolve(c.quality, c.settings.value("defur", json::object()));
-}
-
-glm::vec3 box_extent(const geometry::Mesh& m) {
-  glm::vec3 lo(1e30f), hi(-1e30f);
-  for (std::size_t v = 0; v < m.vertex_count(); ++v)
-    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], m.positions[3 * v + std::size_t(a)]), hi[a] = std::max(hi[a], m.positions[3 * v + std::size_t(a)]);
-  return m.vertex_count() ? hi - lo : glm::vec3(0.f);
-}
-double box_diagonal(const geometry::Mesh& m) { return double(glm::length(box_extent(m))); }
-double longest_side(const geometry::Mesh& m) {
-  const glm::vec3 e = box_extent(m);
-  return double(std::max({e.x, e.y, e.z}));
 }
 
 // The bald body's grid for the penetration loss: spacing half the fur's median thickness, so a
@@ -53,7 +40,7 @@ int sdf_resolution(const geometry::Mesh& bald, const knowledge::Knowledge& knowl
   for (std::int32_t r : bald.regions)
     if (knowledge.has(body::Region(r)) && knowledge.at(body::Region(r)).thickness_cm > 0)
       thickness.push_back(float(knowledge.at(body::Region(r)).thickness_cm / cm_per_unit));
-  const double longest = longest_side(bald);
+  const double longest = double(geometry::mesh_bounds(bald).longest());
   if (thickness.empty()) return 128;
   std::nth_element(thickness.begin(), thickness.begin() + std::ptrdiff_t(thickness.size() / 2), thickness.end());
   const double spacing = 0.5 * double(thickness[thickness.size() / 2]);
@@ -87,7 +74,7 @@ json ground_truth_metrics(const StageContext& c, const geometry::Mesh& bald, con
   const std::optional<io::GroundTruth> gt = io::find_ground_truth(c.scene_dir);
   if (!gt || !fs::exists(gt->bald())) return json();
   const geometry::Mesh reference = io::read_mesh(gt->bald());
-  const double diagonal_mm = box_diagonal(reference) * gt->cm_per_unit * 10.0;
+  const double diagonal_mm = double(geometry::mesh_bounds(reference).diagonal()) * gt->cm_per_unit * 10.0;
   const auto against = [&](const geometry::Mesh& m) {
     json j = metrics::to_json(metrics::surface_metrics(m, reference, gt->cm_per_unit));
     j["chamfer_percent_of_diagonal"] = 100.0 * j["chamfer_mm"]["mean"].get<double>() / diagonal_mm;
@@ -128,14 +115,14 @@ json DefurStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) 
   const DefurOutputs out{out_dir};
   const BodyOutputs body_files = body_outputs(c.work);
   const KnowledgeOutputs k_files = knowledge_outputs(c.work);
-  const auto t_all = Clock::now();
+  const Stopwatch t_all;
   json seconds = json::object();
 
-  auto t = Clock::now();
+  Stopwatch t;
   const geometry::Mesh outer = io::read_mesh(body_files.outer_regions());
   const knowledge::Knowledge knowledge = knowledge::read_knowledge(k_files.knowledge());
   const double cm = read_metric_scale(k_files);
-  seconds["read"] = since(t);
+  seconds["read"] = t.seconds();
 
   defur::DefurOptions options;
   options.resolution = s.resolution, options.target_faces = std::uint64_t(s.faces);
@@ -153,7 +140,7 @@ json DefurStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) 
 
   // Regions on M_bald: the body re-fitted to it (its labels are the template's, not M_NeuS's
   // nearest, which would drift inwards across thin parts).
-  t = Clock::now();
+  t.restart();
   json refit_summary;
   if (s.refit) {
     const BodySettings b = body_settings().resolve(c.quality, c.settings.value("body", json::object()));
@@ -167,25 +154,25 @@ json DefurStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) 
   } else {
     bald.regions = body::nearest_regions(bald, outer);
   }
-  seconds["refit"] = since(t);
+  seconds["refit"] = t.seconds();
 
-  t = Clock::now();
+  t.restart();
   const defur::VertexFur fur = defur::vertex_fur(bald, knowledge, read_directions_world(k_files), cm, s.knowledge_smoothing);
   io::write_mesh_ply(out.bald(), bald);
   defur::write_vertex_fur(out.vertex_fur(), fur);
   std::size_t bald_vertices = 0;
   for (std::size_t v = 0; v < fur.size(); ++v) bald_vertices += !fur.grows(v);
-  seconds["vertex_knowledge"] = since(t);
+  seconds["vertex_knowledge"] = t.seconds();
 
-  t = Clock::now();
+  t.restart();
   geometry::SdfOptions sdf_options;
   sdf_options.resolution = s.sdf_resolution > 0 ? s.sdf_resolution : sdf_resolution(bald, knowledge, cm);
-  sdf_options.band = 8.f * float(longest_side(bald)) / float(sdf_options.resolution - 1);  // 8 voxels
+  sdf_options.band = 8.f * geometry::mesh_bounds(bald).longest() / float(sdf_options.resolution - 1);  // 8 voxels
   const geometry::SignedDistanceGrid bald_sdf = geometry::signed_distance_grid(bald, sdf_options, out.bald().string());
   defur::write_sdf_file(out.bald_sdf(), {bald_sdf.grid, bald_sdf.band, bald_sdf.distance});
-  seconds["bald_sdf"] = since(t);
+  seconds["bald_sdf"] = t.seconds();
 
-  t = Clock::now();
+  t.restart();
   json masks_summary;
   if (s.masks && !c.scene.cameras.empty()) {
     std::vector<std::uint32_t> views(c.scene.cameras.size());
@@ -198,15 +185,15 @@ json DefurStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) 
     masks_summary = {{"views", masks.size()}, {"animal_pixels", stats.animal}, {"fur_pixels", stats.fur},
                      {"fur_fraction_of_animal", stats.animal ? double(stats.fur) / double(stats.animal) : 0.0}};
   }
-  seconds["masks"] = since(t);
+  seconds["masks"] = t.seconds();
 
-  t = Clock::now();
+  t.restart();
   const std::vector<fs::path> previews = write_previews(c, bald, outer, s.preview_views, out.previews());
-  seconds["previews"] = since(t);
+  seconds["previews"] = t.seconds();
 
   json summary = defur::to_json(result);
   summary["seconds"] = seconds;
-  summary["seconds_total"] = since(t_all);
+  summary["seconds_total"] = t_all.seconds();
   summary["cm_per_unit"] = cm;
   summary["refit"] = refit_summary;
   summary["bald_vertices"] = bald_vertices;

@@ -1,11 +1,11 @@
 #include "engine/pipeline/frames_stage.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/stopwatch.hpp"
 #include "engine/core/log.hpp"
 #include "engine/fur/roots.hpp"
 #include "engine/geometry/point_index.hpp"
@@ -22,15 +22,9 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr int kStageVersion = 1;
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 FramesSettings settings_of(const StageContext& c) {
   return frames_settings().resolve(c.quality, c.settings.value("frames", json::object()));
-}
-
-glm::vec3 vertex(const geometry::Mesh& m, std::uint32_t v) {
-  return {m.positions[3 * std::size_t(v)], m.positions[3 * std::size_t(v) + 1], m.positions[3 * std::size_t(v) + 2]};
 }
 
 double angle_deg(glm::vec3 a, glm::vec3 b) {
@@ -49,7 +43,7 @@ json growth_agreement(const StageContext& c, const geometry::Mesh& bald, const g
   const io::StrandSet strands = io::read_hair(gt->strands());
   std::vector<float> centroids(3 * bald.triangle_count());
   for (std::size_t f = 0; f < bald.triangle_count(); ++f) {
-    const glm::vec3 m = (vertex(bald, bald.triangles[3 * f]) + vertex(bald, bald.triangles[3 * f + 1]) + vertex(bald, bald.triangles[3 * f + 2])) / 3.f;
+    const glm::vec3 m = (bald.position(bald.triangles[3 * f]) + bald.position(bald.triangles[3 * f + 1]) + bald.position(bald.triangles[3 * f + 2])) / 3.f;
     for (int a = 0; a < 3; ++a) centroids[3 * f + std::size_t(a)] = m[a];
   }
   const geometry::PointIndex index(centroids);
@@ -97,17 +91,17 @@ json FramesStage::run(StageContext& c, const fs::path& out_dir, const fs::path&)
   const FramesSettings s = settings_of(c);
   const FramesOutputs out{out_dir};
   const DefurOutputs d = defur_outputs(c.work);
-  const auto t_all = Clock::now();
+  const Stopwatch t_all;
   json seconds = json::object();
 
-  auto t = Clock::now();
+  Stopwatch t;
   const geometry::Mesh bald = io::read_mesh(d.bald());
   const defur::VertexFur fur = defur::read_vertex_fur(d.vertex_fur(), bald.vertex_count());
   const double cm = read_metric_scale(knowledge_outputs(c.work));
-  seconds["read"] = since(t);
+  seconds["read"] = t.seconds();
 
   // Guides: the growing vertices' mean direction on faces that grow fur.
-  t = Clock::now();
+  t.restart();
   const std::vector<std::uint8_t> growing = fur::fur_faces(bald, fur);
   std::vector<glm::vec3> guides(bald.triangle_count(), glm::vec3(0.f));
   if (s.guide)
@@ -120,7 +114,7 @@ json FramesStage::run(StageContext& c, const fs::path& out_dir, const fs::path&)
   geometry::TangentFieldOptions options;
   options.smoothing_length = s.smoothing_cm / cm;
   const geometry::TangentField field = geometry::smooth_tangent_field(bald, guides, options);
-  seconds["field"] = since(t);
+  seconds["field"] = t.seconds();
   const geometry::FieldSmoothness smooth = geometry::field_smoothness(bald, field.tangent);
   // The guides alone (projected, normalised), for comparison: what the solve smooths.
   std::vector<glm::vec3> projected(guides.size(), glm::vec3(0.f));
@@ -132,7 +126,7 @@ json FramesStage::run(StageContext& c, const fs::path& out_dir, const fs::path&)
   log::info("frames: tangent field on ", bald.triangle_count(), " faces (", field.guided_faces, " guided) in ", field.solve_seconds,
             " s; neighbours differ by ", smooth.mean_angle_deg, " degrees on average");
 
-  t = Clock::now();
+  t.restart();
   const std::uint64_t nf = bald.triangle_count();
   io::NpyWrite tangent{"tangent", {nf, 3}, "<f4", {}}, bitangent{"bitangent", {nf, 3}, "<f4", {}}, normal{"normal", {nf, 3}, "<f4", {}};
   for (std::size_t f = 0; f < nf; ++f) {
@@ -141,12 +135,12 @@ json FramesStage::run(StageContext& c, const fs::path& out_dir, const fs::path&)
       tangent.values.push_back(field.tangent[f][a]), bitangent.values.push_back(b[a]), normal.values.push_back(field.normal[f][a]);
   }
   io::write_npz(out.frames(), {tangent, bitangent, normal});
-  seconds["write_frames"] = since(t);
+  seconds["write_frames"] = t.seconds();
 
-  t = Clock::now();
+  t.restart();
   const fur::Roots roots = fur::sample_roots(bald, {field.tangent, field.normal}, fur, std::uint64_t(s.roots), s.seed);
   fur::write_roots(out.roots(), roots);
-  seconds["roots"] = since(t);
+  seconds["roots"] = t.seconds();
   if (roots.size() == 0)
     log::warn("frames: no region of the knowledge grows fur on M_bald, so there are no roots: the fur stage has nothing to grow");
 
@@ -154,7 +148,7 @@ json FramesStage::run(StageContext& c, const fs::path& out_dir, const fs::path&)
   for (std::size_t f = 0; f < nf; ++f)
     if (growing[f]) {
       const std::uint32_t* v = &bald.triangles[3 * f];
-      fur_area += 0.5 * double(glm::length(glm::cross(vertex(bald, v[1]) - vertex(bald, v[0]), vertex(bald, v[2]) - vertex(bald, v[0]))));
+      fur_area += 0.5 * double(glm::length(glm::cross(bald.position(v[1]) - bald.position(v[0]), bald.position(v[2]) - bald.position(v[0]))));
     }
   json summary{{"faces", nf},
                {"guided_faces", field.guided_faces},
@@ -168,7 +162,7 @@ json FramesStage::run(StageContext& c, const fs::path& out_dir, const fs::path&)
                {"seconds", seconds}};
   const json gt = growth_agreement(c, bald, field, guides);
   if (!gt.is_null()) summary["ground_truth"] = gt;
-  summary["seconds_total"] = since(t_all);
+  summary["seconds_total"] = t_all.seconds();
   write_file_atomic(out.metrics(), summary.dump(2) + "\n");
   return summary;
 }

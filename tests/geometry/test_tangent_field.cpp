@@ -156,6 +156,12 @@ TEST_CASE("repair: degenerate, duplicated and non-manifold faces go, small holes
 TEST_CASE("decimation reaches the face budget and stays on the surface; smoothing keeps fixed vertices") {
   Mesh m = test::mesh_of([](glm::dvec3 p) { return test::sphere_sdf(p, {0, 0, 0}, 0.6); }, 1.0, 0.02);
   m.regions.assign(m.vertex_count(), 3);
+  const Bounds box = mesh_bounds(m);  // the sphere's box, and the empty mesh's
+  for (int a = 0; a < 3; ++a) CHECK((box.lo[a] == doctest::Approx(-0.6f).epsilon(0.01) && box.hi[a] == doctest::Approx(0.6f).epsilon(0.01)));
+  CHECK(box.longest() == doctest::Approx(1.2f).epsilon(0.01));
+  CHECK(box.diagonal() == doctest::Approx(1.2f * std::sqrt(3.f)).epsilon(0.01));
+  CHECK(m.position(7) == glm::vec3(m.positions[21], m.positions[22], m.positions[23]));
+  CHECK(mesh_bounds(Mesh{}).diagonal() == 0.f);
   const std::size_t before = m.triangle_count();
   const DecimateReport d = decimate(m, before / 4);
   CHECK(d.faces_after <= before / 4 + 10);
