@@ -19,6 +19,29 @@ std::vector<std::uint8_t> fur_faces(const geometry::Mesh& mesh, const defur::Ver
   return out;
 }
 
+double fur_area(const geometry::Mesh& mesh, const defur::VertexFur& fur) {
+  const std::vector<std::uint8_t> growing = fur_faces(mesh, fur);
+  double area = 0;
+  for (std::size_t f = 0; f < growing.size(); ++f)
+    if (growing[f]) {
+      const std::uint32_t* v = &mesh.triangles[3 * f];
+      area += 0.5 * double(glm::length(glm::cross(mesh.position(v[1]) - mesh.position(v[0]), mesh.position(v[2]) - mesh.position(v[0]))));
+    }
+  return area;
+}
+
+std::vector<glm::vec3> face_growth_guides(const geometry::Mesh& mesh, const defur::VertexFur& fur) {
+  const std::vector<std::uint8_t> growing = fur_faces(mesh, fur);
+  std::vector<glm::vec3> guides(mesh.triangle_count(), glm::vec3(0.f));
+  for (std::size_t f = 0; f < guides.size(); ++f) {
+    if (!growing[f]) continue;
+    glm::vec3 sum(0.f);
+    for (int k = 0; k < 3; ++k) sum += fur.direction[mesh.triangles[3 * f + std::size_t(k)]];
+    if (glm::length(sum) > 0) guides[f] = glm::normalize(sum);
+  }
+  return guides;
+}
+
 Roots sample_roots(const geometry::Mesh& mesh, const FaceFrames& frames, const defur::VertexFur& fur, std::uint64_t count,
                    unsigned seed) {
   const std::size_t nf = mesh.triangle_count();

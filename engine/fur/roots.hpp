@@ -33,8 +33,13 @@ struct FaceFrames {
 // `count` roots (none when no face grows fur). Same inputs and seed: same roots.
 Roots sample_roots(const geometry::Mesh& mesh, const FaceFrames& frames, const defur::VertexFur& fur, std::uint64_t count,
                    unsigned seed);
-// The faces that grow fur and their total area (scene units squared).
+// The faces that grow fur.
 std::vector<std::uint8_t> fur_faces(const geometry::Mesh& mesh, const defur::VertexFur& fur);
+// Their total area (scene units squared).
+double fur_area(const geometry::Mesh& mesh, const defur::VertexFur& fur);
+// Per face, the unit mean growth direction of its vertices where the face grows fur, else 0: the
+// tangent field's guides.
+std::vector<glm::vec3> face_growth_guides(const geometry::Mesh& mesh, const defur::VertexFur& fur);
 
 // roots.npz: face (u4), barycentric, position, tangent, bitangent, normal, direction (f4, n x 3),
 // region (i4), length (f4). The reader checks every array's shape and values, naming the file.

@@ -1,5 +1,6 @@
 #include "engine/gradcheck/catalog.hpp"
 
+#include "engine/fur/fur_field_head_gradcheck.hpp"
 #include "engine/fur/strand_geometry_gradcheck.hpp"
 #include "engine/fur/strand_chamfer_gradcheck.hpp"
 #include "engine/fur/strand_losses_gradcheck.hpp"
@@ -26,6 +27,7 @@ std::vector<std::unique_ptr<DifferentiableKernel>> all_kernels() {
   kernels.push_back(fur::make_strand_geometry_check());
   kernels.push_back(fur::make_strand_losses_check());
   kernels.push_back(fur::make_strand_chamfer_check());
+  kernels.push_back(fur::make_fur_head_check());
   return kernels;
 }
 

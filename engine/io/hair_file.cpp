@@ -1,6 +1,7 @@
 // Cem Yuksel's .hair format (cemyuksel.com/research/hairmodels): a 128-byte header, then the
 // arrays its bit field announces, in order: segments (uint16 per strand), points, thickness,
 // transparency, colours (float32).
+#include <cmath>
 #include <cstring>
 
 #include "engine/core/atomic_file.hpp"
@@ -57,6 +58,37 @@ void write_hair(const std::filesystem::path& path, const StrandSet& s) {
     write_array(out, s.thickness);
     write_array(out, s.transparency);
     write_array(out, s.colors);
+  });
+}
+
+void write_uniform_hair(const std::filesystem::path& path, std::uint32_t strands, std::uint32_t points_per_strand,
+                        const std::function<void(const std::function<void(std::span<const float>)>&)>& produce) {
+  if (points_per_strand < 1 || points_per_strand > 65536)
+    throw InputError(path.string() + ": " + std::to_string(points_per_strand) + " points per strand; .hair stores 1..65536");
+  const std::uint64_t points = std::uint64_t(strands) * points_per_strand;
+  if (points > 0xffffffffull) throw InputError(path.string() + ": " + std::to_string(points) + " points exceed the .hair header's 32-bit count");
+  HairHeader h{};
+  std::memcpy(h.signature, "HAIR", 4);
+  h.hair_count = strands;
+  h.point_count = std::uint32_t(points);
+  h.arrays = kPoints;  // the header's default segment count gives every strand its points
+  h.default_segments = points_per_strand - 1;
+  h.default_thickness = 1.f;
+  h.default_color[0] = h.default_color[1] = h.default_color[2] = 1.f;
+  std::strncpy(h.info, "nf_gpu strands", sizeof h.info - 1);
+  write_file_atomic(path, [&](std::ostream& out) {
+    out.write(reinterpret_cast<const char*>(&h), sizeof h);
+    std::uint64_t written = 0;
+    produce([&](std::span<const float> xyz) {
+      for (float v : xyz)
+        if (!std::isfinite(v))
+          throw InputError(path.string() + ": strand point " + std::to_string((written + std::uint64_t(&v - xyz.data())) / 3) + " is not finite");
+      if (written + xyz.size() > points * 3) throw InternalError(path.string() + ": more points than the header announced");
+      out.write(reinterpret_cast<const char*>(xyz.data()), std::streamsize(xyz.size() * 4));
+      written += xyz.size();
+    });
+    if (written != points * 3)
+      throw InternalError(path.string() + ": " + std::to_string(written / 3) + " points written, the header announced " + std::to_string(points));
   });
 }
 

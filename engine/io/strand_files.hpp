@@ -10,6 +10,8 @@
 //   .usda  a USD BasisCurves prim (linear), widths per vertex, region as a uniform primvar.
 // Little-endian hosts only (x86-64, arm64), checked at compile time.
 #include <filesystem>
+#include <functional>
+#include <span>
 #include <string>
 
 #include "engine/io/strands.hpp"
@@ -18,6 +20,12 @@ namespace nf::io {
 
 void write_hair(const std::filesystem::path& path, const StrandSet& strands);
 StrandSet read_hair(const std::filesystem::path& path);
+// A .hair file of `strands` strands of `points_per_strand` points each (the header's default count,
+// no segments array), whose points `produce` hands over in order, in chunks of any size: memory
+// does not grow with the strand count. InputError for a non-finite point (the file is not
+// written); InternalError when the chunks do not add up to the announced count.
+void write_uniform_hair(const std::filesystem::path& path, std::uint32_t strands, std::uint32_t points_per_strand,
+                        const std::function<void(const std::function<void(std::span<const float>)>&)>& produce);
 
 void write_strands_ply(const std::filesystem::path& path, const StrandSet& strands);
 StrandSet read_strands_ply(const std::filesystem::path& path);

@@ -31,16 +31,6 @@ float unit_float(std::uint64_t bits) { return float(bits >> 40) * (1.f / 1677721
 
 nn::AdamConfig adam_config() { return {0.9f, 0.99f, 1e-15f, 0.f}; }  // instant-nsr-pl's settings
 
-std::vector<float> words_as_floats(const std::vector<std::uint32_t>& w) {
-  std::vector<float> f(w.size());
-  std::memcpy(f.data(), w.data(), w.size() * 4);
-  return f;
-}
-std::vector<std::uint32_t> floats_as_words(const std::vector<float>& f) {
-  std::vector<std::uint32_t> w(f.size());
-  std::memcpy(w.data(), f.data(), f.size() * 4);
-  return w;
-}
 
 }  // namespace
 
@@ -530,11 +520,7 @@ void NeusTrainer::save_checkpoint(const std::filesystem::path& path) const {
   };
   for (auto& [name, values] : field_->save_parameters()) add(name, std::move(values));
   const auto add_adam = [&](const std::string& name, const nn::Adam* adam) {
-    if (!adam) return;
-    nn::Adam::State s = adam->save_state();
-    add(name + ".m", std::move(s.m));
-    add(name + ".v", std::move(s.v));
-    add(name + ".state", words_as_floats(s.words));
+    if (adam) nn::add_state_tensors(adam->save_state(), name, file);
   };
   add_adam("adam.hash_table", adam_table_.get());
   add_adam("adam.sdf", adam_sdf_.get());
@@ -555,10 +541,7 @@ bool NeusTrainer::load_checkpoint(const std::filesystem::path& path) {
   std::vector<std::pair<std::string, std::vector<float>>> params;
   for (const std::string name : {"hash_table", "sdf", "colour"})
     if (name != "hash_table" || field_->has_table()) params.emplace_back(name, file.tensor(name, path).values);
-  const auto adam_state = [&](const std::string& name) {
-    return nn::Adam::State{file.tensor(name + ".m", path).values, file.tensor(name + ".v", path).values,
-                           floats_as_words(file.tensor(name + ".state", path).values)};
-  };
+  const auto adam_state = [&](const std::string& name) { return nn::state_from_tensors(file, name, path); };
   const nn::Adam::State table_state = adam_table_ ? adam_state("adam.hash_table") : nn::Adam::State{};
   const nn::Adam::State sdf_state = adam_state("adam.sdf"), colour_state = adam_state("adam.colour");
   const std::vector<float>& occ = file.tensor("occupancy", path).values;

@@ -102,4 +102,20 @@ Adam::Counters Adam::counters() const {
   return c;
 }
 
+void add_state_tensors(const Adam::State& state, const std::string& prefix, WeightsFile& file) {
+  std::vector<float> words(state.words.size());
+  std::memcpy(words.data(), state.words.data(), words.size() * 4);
+  file.tensors.push_back({prefix + ".m", {state.m.size()}, state.m});
+  file.tensors.push_back({prefix + ".v", {state.v.size()}, state.v});
+  file.tensors.push_back({prefix + ".state", {words.size()}, std::move(words)});
+}
+
+Adam::State state_from_tensors(const WeightsFile& file, const std::string& prefix, const std::filesystem::path& source) {
+  Adam::State s{file.tensor(prefix + ".m", source).values, file.tensor(prefix + ".v", source).values, {}};
+  const std::vector<float>& words = file.tensor(prefix + ".state", source).values;
+  s.words.resize(words.size());
+  std::memcpy(s.words.data(), words.data(), words.size() * 4);
+  return s;
+}
+
 }  // namespace nf::nn

@@ -9,6 +9,7 @@
 
 #include "engine/gpu/buffer.hpp"
 #include "engine/gpu/stream.hpp"
+#include "engine/nn/weights_io.hpp"
 
 namespace nf::nn {
 
@@ -65,5 +66,11 @@ class Adam {
   std::unique_ptr<gpu::Buffer<float>> m_, v_;
   std::unique_ptr<gpu::Buffer<std::uint32_t>> state_;
 };
+
+// Checkpoints: an optimiser's state as tensors PREFIX.m, PREFIX.v, PREFIX.state of a weights file
+// (the counters' words stored bit for bit as floats), and back; InputError naming the file and
+// tensor when one is missing.
+void add_state_tensors(const Adam::State& state, const std::string& prefix, WeightsFile& file);
+Adam::State state_from_tensors(const WeightsFile& file, const std::string& prefix, const std::filesystem::path& source);
 
 }  // namespace nf::nn

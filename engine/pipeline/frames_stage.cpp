@@ -103,14 +103,7 @@ json FramesStage::run(StageContext& c, const fs::path& out_dir, const fs::path&)
   // Guides: the growing vertices' mean direction on faces that grow fur.
   t.restart();
   const std::vector<std::uint8_t> growing = fur::fur_faces(bald, fur);
-  std::vector<glm::vec3> guides(bald.triangle_count(), glm::vec3(0.f));
-  if (s.guide)
-    for (std::size_t f = 0; f < guides.size(); ++f) {
-      if (!growing[f]) continue;
-      glm::vec3 sum(0.f);
-      for (int k = 0; k < 3; ++k) sum += fur.direction[bald.triangles[3 * f + std::size_t(k)]];
-      if (glm::length(sum) > 0) guides[f] = glm::normalize(sum);
-    }
+  const std::vector<glm::vec3> guides = s.guide ? fur::face_growth_guides(bald, fur) : std::vector<glm::vec3>(bald.triangle_count(), glm::vec3(0.f));
   geometry::TangentFieldOptions options;
   options.smoothing_length = s.smoothing_cm / cm;
   const geometry::TangentField field = geometry::smooth_tangent_field(bald, guides, options);
@@ -144,12 +137,7 @@ json FramesStage::run(StageContext& c, const fs::path& out_dir, const fs::path&)
   if (roots.size() == 0)
     log::warn("frames: no region of the knowledge grows fur on M_bald, so there are no roots: the fur stage has nothing to grow");
 
-  double fur_area = 0;
-  for (std::size_t f = 0; f < nf; ++f)
-    if (growing[f]) {
-      const std::uint32_t* v = &bald.triangles[3 * f];
-      fur_area += 0.5 * double(glm::length(glm::cross(bald.position(v[1]) - bald.position(v[0]), bald.position(v[2]) - bald.position(v[0]))));
-    }
+  const double fur_area = fur::fur_area(bald, fur);
   json summary{{"faces", nf},
                {"guided_faces", field.guided_faces},
                {"filled_faces", field.filled_faces},

@@ -8,6 +8,7 @@
 #include "engine/pipeline/body_stage.hpp"
 #include "engine/pipeline/defur_stage.hpp"
 #include "engine/pipeline/frames_stage.hpp"
+#include "engine/pipeline/fur_stage.hpp"
 #include "engine/pipeline/knowledge_stage.hpp"
 #include "engine/pipeline/neus_stage.hpp"
 
@@ -21,7 +22,8 @@ std::vector<std::unique_ptr<Stage>> reconstruction_stages() {
   stages.push_back(std::make_unique<KnowledgeStage>());
   stages.push_back(std::make_unique<DefurStage>());
   stages.push_back(std::make_unique<FramesStage>());
-  // Next, as they land: fur, export.
+  stages.push_back(std::make_unique<FurStage>());
+  // Next, as it lands: export.
   return stages;
 }
 

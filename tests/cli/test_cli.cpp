@@ -373,13 +373,15 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
     CHECK_MESSAGE(fs::exists(work / f), f);
 
   // Defur and frames on the cached stages: M_bald inside M_NeuS, its files, the masks, the roots.
-  const std::string small = " --set defur.resolution=64 --set defur.preview_views=1 --set frames.roots=3000";
+  const std::string small = " --set defur.resolution=64 --set defur.preview_views=1 --set frames.roots=3000"
+                            " --set fur.steps=12 --set fur.warm_steps=4 --set fur.batch=400 --set fur.strands=2500"
+                            " --set fur.metric_strands=300 --set fur.resolution=64 --set fur.preview_views=1 --set fur.chamfer_queries=500";
   const Result framed = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + body +
                             " --set knowledge.preset=cat" + small + " --json");
   INFO(framed.output);
   REQUIRE(framed.code == 0);
   const nf::json five = nf::json::parse(framed.output.substr(framed.output.find('[')));
-  REQUIRE(five.size() == 5);
+  REQUIRE(five.size() == 6);
   CHECK((five[2]["ran"] == false && five[3]["stage"] == "defur" && five[4]["stage"] == "frames"));
   for (const char* f : {"defur/bald.ply", "defur/vertex_fur.npz", "defur/bald_sdf.npz", "defur/refit.ply", "defur/metrics.json",
                         "defur/nonbald_masks/007.png", "defur/previews/000.png", "frames/frames.npz", "frames/roots.npz",
@@ -395,6 +397,20 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   CHECK(fr["roots"] == 3000);
   CHECK(fr["smoothness"]["mean_angle_deg"].get<double>() < 20.0);
   CHECK(fr["ground_truth"]["strands_compared"].get<int>() > 100);
+  // The fur stage: a groom of the asked count (2,500 strands, not the 3,000 roots), its files, scores
+  // against the synth scene's truth beside the baseline groom's.
+  for (const char* f : {"fur/strands.hair", "fur/regions.npz", "fur/scale.json", "fur/model.nfwt", "fur/training.jsonl", "fur/metrics.json"})
+    CHECK_MESSAGE(fs::exists(work / f), f);
+  CHECK(nf::io::read_hair(work / "fur" / "strands.hair").strand_count() == 2500);
+  const nf::json& fur_summary = five[5]["summary"];
+  CHECK(fur_summary["strands"] == 2500);
+  CHECK(fur_summary["steps"] == 12);
+  CHECK(fur_summary["skipped_steps"] == 0);
+  CHECK(fur_summary["groom"]["fscore"]["2cm_20deg"].get<double>() >= 0.0);
+  CHECK(fur_summary["baseline"]["fscore"].contains("2mm_20deg"));
+  CHECK(fur_summary["held_out"]["silhouette_iou"].get<double>() > 0.0);
+  const Result metrics_cmd = run("metrics --pred " + (work / "fur" / "strands.hair").string() + " --strands 200 --json");
+  CHECK(metrics_cmd.code == 0);  // scale.json beside the strands declares the unit
   // Knowledge without any fur: defur still makes M_bald, frames finds no roots and says so.
   const fs::path bald_knowledge = root / "bald_knowledge.json";
   {
@@ -410,6 +426,9 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   CHECK(hairless.output.find("no region of the knowledge grows fur") != std::string::npos);
   const nf::json none = nf::json::parse(hairless.output.substr(hairless.output.find('[')));
   CHECK(none[4]["summary"]["roots"] == 0);
+  CHECK(none[5]["summary"]["strands"] == 0);  // the fur stage writes an empty groom and says why
+  CHECK(hairless.output.find("every region of the knowledge is bald") != std::string::npos);
+  CHECK(nf::io::read_hair(work / "fur" / "strands.hair").strand_count() == 0);
   // --scene-scale overrides the scene's unit; annotate prints the table; an edited file feeds back.
   const std::string annotate = "annotate --scene " + scene.string() + " --out " + work.string() + tiny + body;
   const Result scaled = run(annotate + " --set knowledge.preset=cat --scene-scale 50");
@@ -469,7 +488,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   // The README's tables are the ones the declarations make (regenerate them with --markdown).
   std::ifstream readme(NF_README);
   const std::string manual(std::istreambuf_iterator<char>(readme), {});
-  for (const std::string stage : {"neus", "body", "knowledge", "defur", "frames"}) {
+  for (const std::string stage : {"neus", "body", "knowledge", "defur", "frames", "fur"}) {
     const Result table = run("reconstruct --help-stage " + stage + " --markdown");
     CHECK_MESSAGE(manual.find("### `" + stage + "`\n\n" + table.output) != std::string::npos,
                   "README.md's " << stage << " settings table is stale: paste `nf_gpu reconstruct --help-stage " << stage

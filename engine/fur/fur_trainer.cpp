@@ -1,0 +1,457 @@
+#include "engine/fur/fur_trainer.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <unordered_set>
+
+#include "engine/core/error.hpp"
+#include "engine/core/log.hpp"
+#include "engine/core/stopwatch.hpp"
+#include "engine/fur/prior_training.hpp"
+#include "engine/fur/strand_chamfer.hpp"
+#include "engine/fur/strand_losses.hpp"
+#include "engine/gpu/context.hpp"
+#include "engine/nn/adam.hpp"
+#include "engine/nn/weights_io.hpp"
+#include "engine/splat/image_losses.hpp"
+#include "engine/splat/rasterizer.hpp"
+
+namespace nf::fur {
+namespace {
+
+constexpr int kCheckpointVersion = 1;
+constexpr std::uint32_t kHistoryEvery = 10;
+
+std::uint64_t mix(std::uint64_t z) {
+  z += 0x9E3779B97F4A7C15ull;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+// The near and far planes of a view: around the body's depth range, wide enough for the fur.
+std::pair<double, double> depth_range(const FurView& v, double reach) {
+  double lo = INFINITY, hi = 0;
+  for (float d : v.body_depth)
+    if (std::isfinite(d)) lo = std::min(lo, double(d)), hi = std::max(hi, double(d));
+  if (!(hi > 0)) return {1e-3 * reach, 1e3 * reach};
+  return {std::max(1e-6 * hi, lo - 2 * reach), hi + 2 * reach};
+}
+
+}  // namespace
+
+json to_json(const FurLossWeights& w) {
+  return {{"silhouette", w.silhouette}, {"orientation", w.orientation}, {"direction", w.direction},
+          {"chamfer", w.chamfer},       {"penetration", w.penetration}, {"curvature", w.curvature}};
+}
+
+void FurTrainingOptions::validate() const {
+  const auto fail = [](const std::string& m) { throw InputError("fur training options: " + m); };
+  if (strands < 1) fail("strands per step must be at least 1");
+  if (!(lr > 0) || !(lr_floor >= 0 && lr_floor <= 1)) fail("lr must be positive and lr_floor in [0, 1]");
+  if (!(strand_width >= 0)) fail("strand_width must be 0 (from the data) or positive");
+  if (!(coverage > 0)) fail("coverage must be positive");
+  if (!(lying_angle_deg >= 0 && lying_angle_deg <= 90)) fail("lying_angle_deg must be in [0, 90]");
+  for (double w : {weights.silhouette, weights.orientation, weights.direction, weights.chamfer, weights.penetration, weights.curvature})
+    if (!(w >= 0 && std::isfinite(w))) fail("loss weights must be finite and non-negative");
+}
+
+json to_json(const FurTrainingOptions& o) {
+  return {{"steps", o.steps},
+          {"strands", o.strands},
+          {"warm_steps", o.warm_steps},
+          {"warm_start", o.warm_start},
+          {"lying_angle_deg", o.lying_angle_deg},
+          {"lr", o.lr},
+          {"lr_floor", o.lr_floor},
+          {"weight_decay", o.weight_decay},
+          {"weights", to_json(o.weights)},
+          {"chamfer_queries", o.chamfer_queries},
+          {"strand_width", o.strand_width},
+          {"coverage", o.coverage},
+          {"train_decoder", o.train_decoder},
+          {"seed", o.seed}};
+}
+
+json to_json(const FurStepReport& r) {
+  json j{{"step", r.step},
+         {"warm", r.warm},
+         {"loss", r.loss},
+         {"silhouette", r.silhouette},
+         {"orientation", r.orientation},
+         {"direction", r.direction},
+         {"chamfer", r.chamfer},
+         {"penetration", r.penetration},
+         {"curvature", r.curvature},
+         {"chamfer_unmatched", r.chamfer_unmatched},
+         {"lr", r.lr},
+         {"grad_norm", r.grad_norm},
+         {"skipped_steps", r.skipped_steps},
+         {"seconds", r.seconds}};
+  if (!r.warm) j["view"] = r.view;
+  if (!r.pass_seconds.is_null()) j["pass_seconds"] = r.pass_seconds;
+  return j;
+}
+
+std::vector<std::uint32_t> sample_indices(std::uint64_t n, std::uint32_t count, std::uint64_t seed) {
+  std::vector<std::uint32_t> out;
+  if (count >= n) {
+    out.resize(n);
+    for (std::uint32_t i = 0; i < n; ++i) out[i] = i;
+    return out;
+  }
+  // Floyd's algorithm: count distinct values in O(count).
+  std::mt19937_64 rng(seed);
+  std::unordered_set<std::uint32_t> taken;
+  taken.reserve(count * 2);
+  for (std::uint64_t j = n - count; j < n; ++j) {
+    const std::uint32_t t = std::uint32_t(std::uniform_int_distribution<std::uint64_t>(0, j)(rng));
+    const std::uint32_t pick = taken.count(t) ? std::uint32_t(j) : t;
+    taken.insert(pick);
+    out.push_back(pick);
+  }
+  return out;
+}
+
+std::vector<float> lifted_strand_latent(StrandPrior& prior, double lying_angle_deg) {
+  const double a = lying_angle_deg * M_PI / 180.0;
+  std::vector<float> strand(std::size_t(kStrandPoints) * 3);
+  for (std::uint32_t k = 0; k < kStrandPoints; ++k) {
+    const double t = double(k) / kStrandSegments;
+    strand[3 * k] = float(t * std::cos(a)), strand[3 * k + 1] = 0.f, strand[3 * k + 2] = float(t * std::sin(a));
+  }
+  return fit_latents(prior, strand, 300, 1e-2f, true).latents;
+}
+
+struct FurTrainer::Impl {
+  Impl(gpu::Context& c, const FurTrainingData& d, FurField& field, const FurTrainingOptions& o)
+      : batch(field, std::min<std::uint32_t>(o.strands, std::uint32_t(d.roots.size()))),
+        rasterizer(c),
+        loss_shape{batch.strands, kStrandPoints},
+        loss_scratch(c, loss_shape),
+        chamfer_grid(fur::chamfer_grid(d.lo, d.hi, 64)),
+        chamfer_queries(std::min<std::uint64_t>(o.chamfer_queries, d.surface_points.size() / 3)),
+        chamfer_scratch(c, std::uint64_t(batch.strands) * kStrandPoints, std::max<std::uint64_t>(1, chamfer_queries), chamfer_grid),
+        guides(c, std::uint64_t(batch.strands) * 3, "fur guides"),
+        lengths(c, batch.strands, "fur lengths"),
+        sdf(c, d.bald_sdf.values, "bald sdf"),
+        queries(c, std::max<std::uint64_t>(1, chamfer_queries) * 3, "chamfer queries"),
+        losses(c, 4, "fur image losses") {
+    std::uint64_t most = 1;
+    for (const auto* views : {&d.train, &d.held_out})
+      for (const FurView& v : *views) most = std::max(most, v.pixels());
+    for (auto* b : {&image, &grad_image}) b->reset(new gpu::Buffer<float>(c, most * splat::kChannels, "fur image"));
+    for (auto* b : {&mask, &weight, &angle, &confidence, &depth}) b->reset(new gpu::Buffer<float>(c, most, "fur view target"));
+    grid.dims = {d.bald_sdf.grid.dims.x, d.bald_sdf.grid.dims.y, d.bald_sdf.grid.dims.z};
+    grid.origin = {d.bald_sdf.grid.origin.x, d.bald_sdf.grid.origin.y, d.bald_sdf.grid.origin.z};
+    grid.spacing = d.bald_sdf.grid.voxel;
+  }
+  FurField::Batch batch;
+  splat::StrandRasterizer rasterizer;
+  StrandLossShape loss_shape;
+  StrandLossScratch loss_scratch;
+  ChamferGrid chamfer_grid;
+  std::uint64_t chamfer_queries;
+  StrandChamferScratch chamfer_scratch;
+  SdfGridRef grid;
+  gpu::Buffer<float> guides, lengths, sdf, queries, losses;
+  std::unique_ptr<gpu::Buffer<float>> image, grad_image, mask, weight, angle, confidence, depth;
+  std::unique_ptr<nn::Adam> adam, adam_decoder;
+  std::uint32_t uploaded_view = ~0u;
+
+  void upload_view(const FurView& v) {
+    mask->upload(v.mask);
+    weight->upload(v.silhouette_weight);
+    angle->upload(v.gabor_angle);
+    std::vector<float> c(v.pixels());
+    for (std::size_t p = 0; p < c.size(); ++p) c[p] = v.gabor_confidence[p] * v.orientation_weight[p];
+    confidence->upload(c);
+    depth->upload(v.body_depth);
+  }
+};
+
+FurTrainer::FurTrainer(gpu::Context& context, const FurTrainingData& data, StrandPrior& prior, const FurFieldConfig& field,
+                       const FurTrainingOptions& options)
+    : context_(context), data_(data), options_(options), field_config_(field) {
+  options_.validate();
+  if (data.roots.size() == 0) throw InputError("fur: there are no roots (every region is bald); there is no fur to grow");
+  field_ = std::make_unique<FurField>(context, field, prior, root_box(data.roots), options.seed);
+  if (options.warm_start) {
+    const std::vector<float> z = lifted_strand_latent(prior, options.lying_angle_deg);
+    field_->start_at(z, 0.5413f, 0.1f);  // softplus(0.5413) = 1: every segment starts fully confident
+  }
+  impl_ = std::make_unique<Impl>(context, data, *field_, options_);
+  nn::AdamConfig adam;
+  const std::uint64_t count = field_->mlp().parameters().size();
+  impl_->adam = std::make_unique<nn::Adam>(context, count, adam, std::vector<nn::ParamGroup>{{0, count, 1.f, options.weight_decay}});
+  if (options.train_decoder) {
+    const std::uint64_t dc = prior.decoder().parameters().size();
+    impl_->adam_decoder = std::make_unique<nn::Adam>(context, dc, adam, std::vector<nn::ParamGroup>{{0, dc, 0.1f, 0.f}});
+  }
+}
+
+FurTrainer::~FurTrainer() = default;
+
+double FurTrainer::strand_width(std::uint32_t strands) const {
+  if (options_.strand_width > 0 || !(data_.fur_area > 0)) return (options_.strand_width > 0 ? options_.strand_width : 0.0025) * data_.scene_radius;
+  double mean_length = 0;
+  for (float l : data_.roots.length) mean_length += l;
+  mean_length /= double(data_.roots.size());
+  return options_.coverage * data_.fur_area / (2.0 * std::max(1u, strands) * mean_length);
+}
+
+std::uint32_t FurTrainer::batch() const { return impl_->batch.strands; }
+
+FurStepReport FurTrainer::train_step() {
+  Impl& m = *impl_;
+  const Stopwatch t_step;
+  FurStepReport r;
+  r.warm = step_ < options_.warm_steps || data_.train.empty();
+  const std::uint64_t seed = mix(mix(options_.seed) ^ step_);
+  const std::vector<std::uint32_t> ids = sample_indices(data_.roots.size(), m.batch.strands, seed);
+  std::vector<float> normalised, frames, guides(ids.size() * 3), lengths(ids.size());
+  strand_inputs(data_.roots, ids, field_->box(), normalised, frames);
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    for (int a = 0; a < 3; ++a) guides[3 * k + std::size_t(a)] = data_.roots.direction[ids[k]][a];
+    lengths[k] = data_.roots.length[ids[k]];
+  }
+  m.batch.roots.upload(normalised);
+  m.batch.frames.upload(frames);
+  m.guides.upload(guides);
+  m.lengths.upload(lengths);
+  json passes = json::object();
+  passes["inputs"] = t_step.seconds();
+
+  gpu::Stream stream(context_);
+  Stopwatch t;
+  field_->forward(stream, m.batch);
+  stream.submit_and_wait();
+  passes["field_forward"] = t.seconds();
+
+  const splat::StrandShape shape{m.batch.strands, kStrandPoints};
+  const double radius = data_.scene_radius;
+  const FurView* view = nullptr;
+  if (!r.warm) {
+    std::mt19937_64 rng(seed ^ 0x5bd1e995ull);
+    r.view = std::uint32_t(std::uniform_int_distribution<std::size_t>(0, data_.train.size() - 1)(rng));
+    view = &data_.train[r.view];
+    t.restart();
+    if (m.uploaded_view != r.view) m.upload_view(*view), m.uploaded_view = r.view;
+    const std::uint64_t px = view->pixels();
+    const auto [near, far] = depth_range(*view, double(*std::max_element(lengths.begin(), lengths.end())));
+    splat::RasterParams params;
+    params.gaussian.width = strand_width(m.batch.strands);
+    m.rasterizer.forward(shape, m.batch.points, m.batch.confidence, splat::raster_camera(view->crop, near, far), params,
+                         m.depth->range(0, px), m.image->range(0, 5 * px));
+    passes["raster_forward"] = t.seconds();
+    r.view = view->camera;
+
+    t.restart();
+    const splat::ImageSize size{view->crop.width, view->crop.height};
+    const splat::ImageLossInputBuffers in{m.image->range(0, px), m.image->range(px, 2 * px), m.image->range(3 * px, px)};
+    const splat::ImageLossTargetBuffers targets{m.mask->range(0, px), m.weight->range(0, px), m.angle->range(0, px),
+                                                m.confidence->range(0, px)};
+    stream.fill(m.grad_image->range(4 * px, px), 0u);  // no loss on the depth channel
+    const splat::ImageLossGradientBuffers grads{m.grad_image->range(0, px), m.grad_image->range(px, 2 * px), m.grad_image->range(3 * px, px)};
+    splat::image_losses_forward(stream, size, {}, in, targets, m.losses);
+    splat::image_losses_backward(stream, size, {}, in, targets, m.losses, float(options_.weights.silhouette),
+                                 float(options_.weights.orientation * view->orientation_reliability), grads);
+    m.rasterizer.backward(stream, m.grad_image->range(0, 5 * px), m.batch.grad_points, m.batch.grad_confidence, false);
+    stream.submit_and_wait();
+    passes["image_losses_and_raster_backward"] = t.seconds();
+  } else {
+    stream.fill(m.batch.grad_confidence, 0u);
+  }
+
+  t.restart();
+  StrandLossBatch lb{m.loss_shape, m.grid, m.batch.points, m.guides, m.lengths, m.sdf};
+  StrandLossWeights w{options_.weights.direction, r.warm ? 0.0 : options_.weights.curvature, options_.weights.penetration / radius};
+  strand_losses_forward(stream, lb, m.loss_scratch);
+  strand_losses_backward(stream, lb, m.loss_scratch, w, m.batch.grad_points, !r.warm);
+  const bool chamfer = !r.warm && m.chamfer_queries > 0 && options_.weights.chamfer > 0;
+  if (chamfer) {
+    std::vector<float> q(m.chamfer_queries * 3);
+    const std::vector<std::uint32_t> qi = sample_indices(data_.surface_points.size() / 3, std::uint32_t(m.chamfer_queries), seed ^ 0xc4a3ull);
+    for (std::size_t k = 0; k < qi.size(); ++k)
+      for (int a = 0; a < 3; ++a) q[3 * k + std::size_t(a)] = data_.surface_points[3 * std::size_t(qi[k]) + std::size_t(a)];
+    m.queries.upload(q);
+    strand_chamfer_forward(stream, m.chamfer_grid, m.queries, m.batch.points, m.chamfer_scratch);
+    strand_chamfer_backward(stream, m.queries, m.batch.points, m.chamfer_scratch, options_.weights.chamfer / (radius * radius),
+                            m.batch.grad_points, true);
+  }
+  stream.submit_and_wait();
+  passes["strand_losses"] = t.seconds();
+
+  t.restart();
+  field_->backward(stream, m.batch);
+  nn::LearningRateSchedule schedule{options_.lr, 0, options_.steps, options_.lr_floor};
+  r.lr = schedule.at(step_);
+  m.adam->step(stream, field_->mlp().parameters(), field_->mlp().gradients(), r.lr);
+  if (m.adam_decoder) m.adam_decoder->step(stream, field_->prior().decoder().parameters(), field_->prior().decoder().gradients(), r.lr);
+  stream.submit_and_wait();
+  passes["field_backward_and_adam"] = t.seconds();
+
+  // The losses of this step (unweighted), the optimiser's counters.
+  t.restart();
+  const std::array<double, 3> geo = strand_loss_values(m.loss_scratch, m.loss_shape);
+  r.direction = geo[0], r.curvature = geo[1], r.penetration = geo[2];
+  if (!r.warm) {
+    const std::vector<float> l = m.losses.download();
+    r.silhouette = l[0], r.orientation = l[1] * view->orientation_reliability;  // as it enters the loss
+  }
+  if (chamfer) {
+    const ChamferValue cv = strand_chamfer_value(m.chamfer_scratch);
+    r.chamfer = cv.loss, r.chamfer_unmatched = cv.unmatched;
+  }
+  const FurLossWeights& fw = options_.weights;
+  r.loss = fw.direction * r.direction + fw.penetration * r.penetration / radius +
+           (r.warm ? 0.0 : fw.curvature * r.curvature + fw.silhouette * r.silhouette + fw.orientation * r.orientation +
+                               fw.chamfer * r.chamfer / (radius * radius));
+  const nn::Adam::Counters counters = m.adam->counters();
+  r.grad_norm = counters.last_norm;
+  r.skipped_steps = counters.skipped;
+  passes["readback"] = t.seconds();
+  ++step_;
+  seconds_ += t_step.seconds();
+  r.step = step_;
+  r.seconds = seconds_;
+  r.pass_seconds = passes;
+  return r;
+}
+
+FurStepReport FurTrainer::train(std::uint32_t until, const std::filesystem::path& checkpoint,
+                                const std::function<bool(const FurStepReport&)>& after_step) {
+  until = std::min(until, options_.steps);
+  FurStepReport report = last_;
+  while (step_ < until) {
+    report = train_step();
+    last_ = report;
+    if (step_ % kHistoryEvery == 0 || step_ == until || step_ == options_.warm_steps) history_.push_back(report);
+    if (!checkpoint.empty() && options_.checkpoint_interval > 0 && (step_ % options_.checkpoint_interval == 0 || step_ == until))
+      save_checkpoint(checkpoint);
+    if (after_step && !after_step(report)) break;
+  }
+  return report;
+}
+
+std::vector<float> FurTrainer::render(const FurView& view, std::uint32_t strands, unsigned seed) {
+  const std::vector<std::uint32_t> ids = sample_indices(data_.roots.size(), strands, seed);
+  FurField::Batch batch(*field_, std::uint32_t(ids.size()));
+  std::vector<float> normalised, frames;
+  strand_inputs(data_.roots, ids, field_->box(), normalised, frames);
+  batch.roots.upload(normalised);
+  batch.frames.upload(frames);
+  gpu::Stream stream(context_);
+  field_->forward(stream, batch);
+  stream.submit_and_wait();
+  float longest = 0;
+  for (std::uint32_t id : ids) longest = std::max(longest, data_.roots.length[id]);
+  const auto [near, far] = depth_range(view, longest);
+  splat::RasterParams params;
+  params.gaussian.width = strand_width(std::uint32_t(ids.size()));
+  const std::uint64_t px = view.pixels();
+  gpu::Buffer<float> depth(context_, view.body_depth, "fur score depth"), image(context_, 5 * px, "fur score image");
+  impl_->rasterizer.forward({batch.strands, kStrandPoints}, batch.points, batch.confidence, splat::raster_camera(view.crop, near, far), params,
+                            depth, image);
+  return image.download();
+}
+
+ViewScore score_view(const FurView& view, const std::vector<float>& img) {
+  const std::uint64_t px = view.pixels();
+  ViewScore s;
+  double inter = 0, uni = 0, err = 0, wsum = 0;
+  for (std::uint64_t p = 0; p < px; ++p) {
+    if (view.silhouette_weight[p] > 0.5f) {
+      const bool a = img[p] > 0.5f, m = view.mask[p] > 0.5f;
+      inter += a && m, uni += a || m;
+    }
+    const double ox = img[px + p], oy = img[2 * px + p], w = double(view.gabor_confidence[p]) * view.orientation_weight[p];
+    if (w > 0 && std::hypot(ox, oy) > 1e-6) {
+      const double beta = 0.5 * std::atan2(oy, ox);
+      double d = std::fmod(std::abs(beta - view.gabor_angle[p]), M_PI);
+      d = std::min(d, M_PI - d);
+      err += w * d, wsum += w;
+    }
+  }
+  s.silhouette_iou = uni > 0 ? inter / uni : 0;
+  s.orientation_error_deg = wsum > 0 ? err / wsum * 180.0 / M_PI : 0;
+  s.pixels = px;
+  return s;
+}
+
+void FurTrainer::save_checkpoint(const std::filesystem::path& path) const {
+  nn::WeightsFile file;
+  file.config = {{"kind", "fur checkpoint"},   {"version", kCheckpointVersion}, {"field", field_config_.to_json()},
+                 {"options", to_json(options_)}, {"step", step_},                 {"seconds", seconds_},
+                 {"last", to_json(last_)},       {"history", json::array()}};
+  for (const FurStepReport& r : history_) file.config["history"].push_back(to_json(r));
+  std::vector<float> p = field_->parameters();
+  file.tensors.push_back({"field", {p.size()}, std::move(p)});
+  nn::add_state_tensors(impl_->adam->save_state(), "adam.field", file);
+  if (impl_->adam_decoder) {
+    std::vector<float> d = field_->prior().decoder().parameters().download();
+    file.tensors.push_back({"decoder", {d.size()}, std::move(d)});
+    nn::add_state_tensors(impl_->adam_decoder->save_state(), "adam.decoder", file);
+  }
+  nn::save_weights(path, file);
+}
+
+namespace {
+FurStepReport report_from_json(const json& j) {
+  FurStepReport r;
+  r.step = j.at("step").get<std::uint32_t>();
+  r.warm = j.at("warm").get<bool>();
+  r.view = j.value("view", 0u);
+  for (auto [name, field] : {std::pair{"loss", &r.loss}, {"silhouette", &r.silhouette}, {"orientation", &r.orientation},
+                             {"direction", &r.direction}, {"chamfer", &r.chamfer}, {"penetration", &r.penetration},
+                             {"curvature", &r.curvature}, {"seconds", &r.seconds}})
+    *field = j.at(name).get<double>();
+  r.chamfer_unmatched = j.at("chamfer_unmatched").get<std::uint64_t>();
+  r.lr = j.at("lr").get<float>();
+  r.grad_norm = j.at("grad_norm").get<float>();
+  r.skipped_steps = j.at("skipped_steps").get<std::uint32_t>();
+  if (j.contains("pass_seconds")) r.pass_seconds = j["pass_seconds"];
+  return r;
+}
+}  // namespace
+
+bool FurTrainer::load_checkpoint(const std::filesystem::path& path) {
+  const nn::WeightsFile file = nn::load_weights(path);
+  const json& c = file.config;
+  if (!c.contains("kind") || c["kind"] != "fur checkpoint") throw InputError(path.string() + ": not a fur checkpoint");
+  if (c.value("version", 0) != kCheckpointVersion || c.value("field", json()) != field_config_.to_json() ||
+      c.value("options", json()) != to_json(options_))
+    return false;
+  const std::vector<float>& params = file.tensor("field", path).values;
+  const nn::Adam::State state = nn::state_from_tensors(file, "adam.field", path);
+  std::vector<float> decoder;
+  nn::Adam::State decoder_state;
+  if (impl_->adam_decoder) decoder = file.tensor("decoder", path).values, decoder_state = nn::state_from_tensors(file, "adam.decoder", path);
+  FurStepReport last;
+  std::vector<FurStepReport> history;
+  std::uint32_t step = 0;
+  double seconds = 0;
+  try {
+    step = c.at("step").get<std::uint32_t>();
+    seconds = c.at("seconds").get<double>();
+    last = report_from_json(c.at("last"));
+    for (const json& r : c.at("history")) history.push_back(report_from_json(r));
+  } catch (const json::exception& e) {
+    throw InputError(path.string() + ": " + e.what());
+  }
+  if (params.size() != field_->mlp().parameters().size())
+    throw InputError(path.string() + ": the field has " + std::to_string(params.size()) + " parameters, this network " +
+                     std::to_string(field_->mlp().parameters().size()));
+  field_->set_parameters(params);
+  impl_->adam->load_state(state);
+  if (impl_->adam_decoder) {
+    if (decoder.size() != field_->prior().decoder().parameters().size()) throw InputError(path.string() + ": the decoder's size differs");
+    field_->prior().decoder().parameters().upload(decoder);
+    impl_->adam_decoder->load_state(decoder_state);
+  }
+  step_ = step, seconds_ = seconds, last_ = last, history_ = std::move(history);
+  return true;
+}
+
+}  // namespace nf::fur

@@ -1,0 +1,138 @@
+#include "engine/fur/fur_views.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "engine/core/error.hpp"
+#include "engine/defur/nonbald_masks.hpp"
+#include "engine/orient/orientation_map.hpp"
+
+namespace nf::fur {
+
+io::Camera scaled_crop(const io::Camera& camera, double sx, double sy, std::uint32_t x0, std::uint32_t y0, std::uint32_t width,
+                       std::uint32_t height) {
+  io::Camera c = camera;
+  c.fx = camera.fx * sx, c.fy = camera.fy * sy;
+  c.cx = camera.cx * sx - double(x0), c.cy = camera.cy * sy - double(y0);
+  c.width = width, c.height = height;
+  return c;
+}
+
+FurView make_fur_view(gpu::Context& gpu, const io::Scene& scene, std::uint32_t camera, const io::Image* nonbald,
+                      const geometry::Mesh& bald, const FurViewOptions& options) {
+  const io::Camera& cam = scene.cameras.at(camera);
+  const io::Image photo = io::read_image(cam.image);
+  if (photo.width != cam.width || photo.height != cam.height)
+    throw InputError(cam.image.string() + ": " + std::to_string(photo.width) + "x" + std::to_string(photo.height) +
+                     " pixels, but camera '" + cam.name + "' is " + std::to_string(cam.width) + "x" + std::to_string(cam.height));
+  const std::vector<std::uint8_t> mask = io::mask_of(io::read_image(cam.mask));
+  if (mask.size() != std::size_t(cam.width) * cam.height)
+    throw InputError(cam.mask.string() + ": the mask does not have camera '" + cam.name + "''s size");
+  if (nonbald && (nonbald->width != cam.width || nonbald->height != cam.height))
+    throw InputError("fur: the non-bald mask of camera '" + cam.name + "' does not have the camera's size (rerun the defur stage)");
+  const orient::OrientationMap gabor = orient::gabor_orientation(gpu, photo, &mask, options.gabor);
+  // The mask eroded by the outline band (3 x 3 erosions: a chessboard distance).
+  const int outline = options.outline_px >= 0 ? options.outline_px
+                                              : int(std::ceil(options.gabor.support * std::max(options.gabor.sigma_x, options.gabor.sigma_y)));
+  std::vector<std::uint8_t> inner = mask, next(mask.size());
+  for (int it = 0; it < outline; ++it) {
+    for (std::uint32_t y = 0; y < cam.height; ++y)
+      for (std::uint32_t x = 0; x < cam.width; ++x) {
+        std::uint8_t keep = inner[std::size_t(y) * cam.width + x];
+        for (int dy = -1; dy <= 1 && keep; ++dy)
+          for (int dx = -1; dx <= 1 && keep; ++dx) {
+            const int xx = int(x) + dx, yy = int(y) + dy;
+            if (xx < 0 || yy < 0 || xx >= int(cam.width) || yy >= int(cam.height) || !inner[std::size_t(yy) * cam.width + std::size_t(xx)]) keep = 0;
+          }
+        next[std::size_t(y) * cam.width + x] = keep;
+      }
+    inner.swap(next);
+  }
+
+  // The rendering grid and the mask's box on it.
+  const std::uint32_t side = std::max(cam.width, cam.height);
+  const double scale = options.max_side && side > options.max_side ? double(options.max_side) / side : 1.0;
+  const std::uint32_t W = std::max(1u, std::uint32_t(std::lround(cam.width * scale))), H = std::max(1u, std::uint32_t(std::lround(cam.height * scale)));
+  const double sx = double(W) / cam.width, sy = double(H) / cam.height;
+  std::uint32_t bx0 = cam.width, by0 = cam.height, bx1 = 0, by1 = 0;
+  for (std::uint32_t y = 0; y < cam.height; ++y)
+    for (std::uint32_t x = 0; x < cam.width; ++x)
+      if (mask[std::size_t(y) * cam.width + x]) bx0 = std::min(bx0, x), by0 = std::min(by0, y), bx1 = std::max(bx1, x + 1), by1 = std::max(by1, y + 1);
+  if (bx1 == 0) throw InputError(cam.mask.string() + ": the mask of camera '" + cam.name + "' is empty");
+  const auto lo = [&](std::uint32_t v, double s) { return std::uint32_t(std::max(0.0, std::floor(v * s) - options.margin_px)); };
+  const auto hi = [&](std::uint32_t v, double s, std::uint32_t n) { return std::uint32_t(std::min<double>(n, std::ceil(v * s) + options.margin_px)); };
+  const std::uint32_t x0 = lo(bx0, sx), y0 = lo(by0, sy), x1 = hi(bx1, sx, W), y1 = hi(by1, sy, H);
+
+  // Summed-area tables of the Gabor field's doubled-angle vectors (confidence-weighted) and of the
+  // confidences: the coherence of any window in O(1).
+  const std::size_t SW = std::size_t(cam.width) + 1;
+  std::vector<double> sum_x(SW * (cam.height + 1), 0.0), sum_y(sum_x.size(), 0.0), sum_c(sum_x.size(), 0.0);
+  for (std::uint32_t y = 0; y < cam.height; ++y)
+    for (std::uint32_t x = 0; x < cam.width; ++x) {
+      const std::size_t i = std::size_t(y) * cam.width + x, at = (y + 1) * SW + x + 1;
+      const double a = gabor.orientation.pixels[i], c = gabor.confidence.pixels[i];
+      sum_x[at] = c * std::cos(2 * a) + sum_x[at - 1] + sum_x[at - SW] - sum_x[at - SW - 1];
+      sum_y[at] = c * std::sin(2 * a) + sum_y[at - 1] + sum_y[at - SW] - sum_y[at - SW - 1];
+      sum_c[at] = c + sum_c[at - 1] + sum_c[at - SW] - sum_c[at - SW - 1];
+    }
+  const auto box = [&](const std::vector<double>& t, std::uint32_t bx0_, std::uint32_t by0_, std::uint32_t bx1_, std::uint32_t by1_) {
+    return t[by1_ * SW + bx1_] - t[by0_ * SW + bx1_] - t[by1_ * SW + bx0_] + t[by0_ * SW + bx0_];
+  };
+
+  FurView v;
+  v.camera = camera;
+  v.crop = scaled_crop(cam, sx, sy, x0, y0, x1 - x0, y1 - y0);
+  const std::uint64_t n = v.pixels();
+  v.mask.assign(n, 0.f), v.silhouette_weight.assign(n, 0.f), v.orientation_weight.assign(n, 0.f);
+  v.gabor_angle.assign(n, 0.f), v.gabor_confidence.assign(n, 0.f), v.rgb.assign(3 * n, 0.f);
+  for (std::uint32_t y = 0; y < v.crop.height; ++y)
+    for (std::uint32_t x = 0; x < v.crop.width; ++x) {
+      // The photo pixels whose centres fall in this rendering pixel.
+      const std::uint32_t px0 = std::uint32_t(std::ceil((x + x0) / sx - 0.5)), px1 = std::uint32_t(std::ceil((x + x0 + 1) / sx - 0.5));
+      const std::uint32_t py0 = std::uint32_t(std::ceil((y + y0) / sy - 0.5)), py1 = std::uint32_t(std::ceil((y + y0 + 1) / sy - 0.5));
+      double m = 0, fur = 0, fur_inner = 0, ox = 0, oy = 0, count = 0, rgb[3] = {0, 0, 0};
+      for (std::uint32_t py = py0; py < std::min(py1, cam.height); ++py)
+        for (std::uint32_t px = px0; px < std::min(px1, cam.width); ++px) {
+          const std::size_t i = std::size_t(py) * cam.width + px;
+          const double inside = mask[i] ? 1.0 : 0.0;
+          m += inside;
+          const double grows = nonbald ? double(nonbald->pixels[i * nonbald->channels] > 0.5f) : 1.0;
+          fur += inside * grows;
+          fur_inner += (inner[i] ? 1.0 : 0.0) * grows;
+          const double a = gabor.orientation.pixels[i], c = gabor.confidence.pixels[i];
+          ox += c * std::cos(2 * a), oy += c * std::sin(2 * a);
+          for (std::uint32_t ch = 0; ch < 3; ++ch) rgb[ch] += photo.pixels[i * photo.channels + std::min(ch, photo.channels - 1)];
+          count += 1;
+        }
+      const std::size_t o = std::size_t(y) * v.crop.width + x;
+      if (count == 0) { v.silhouette_weight[o] = 1.f; continue; }
+      m /= count, fur /= count, fur_inner /= count, ox /= count, oy /= count;
+      for (std::uint32_t ch = 0; ch < 3; ++ch) v.rgb[3 * o + ch] = float(rgb[ch] / count);
+      v.mask[o] = float(m);
+      v.silhouette_weight[o] = float(1.0 - (m - fur));
+      v.orientation_weight[o] = float(fur_inner);
+      double angle = 0.5 * std::atan2(oy, ox);
+      if (angle < 0) angle += M_PI;
+      v.gabor_angle[o] = float(angle);
+      // Reliability: the coherence of the orientations in a window of at least coherence_px photo
+      // pixels about this pixel's footprint, above what as many random orientations would show.
+      const std::uint32_t half = options.coherence_px / 2;
+      const std::uint32_t wx0 = std::min(px0, (px0 + px1) / 2 > half ? (px0 + px1) / 2 - half : 0u);
+      const std::uint32_t wy0 = std::min(py0, (py0 + py1) / 2 > half ? (py0 + py1) / 2 - half : 0u);
+      const std::uint32_t wx1 = std::min(cam.width, std::max(px1, (px0 + px1) / 2 + half + 1));
+      const std::uint32_t wy1 = std::min(cam.height, std::max(py1, (py0 + py1) / 2 + half + 1));
+      const double c_sum = box(sum_c, wx0, wy0, wx1, wy1);
+      if (c_sum > 0) {
+        const double coherence = std::hypot(box(sum_x, wx0, wy0, wx1, wy1), box(sum_y, wx0, wy0, wx1, wy1)) / c_sum;
+        const double noise = 2.0 / std::sqrt(double(wx1 - wx0) * double(wy1 - wy0));
+        v.gabor_confidence[o] = float(std::clamp((coherence - noise) / (1.0 - noise), 0.0, 1.0));
+      }
+    }
+  double reliable = 0, fur_pixels = 0;
+  for (std::uint64_t p = 0; p < n; ++p) reliable += double(v.orientation_weight[p]) * v.gabor_confidence[p], fur_pixels += v.orientation_weight[p];
+  v.orientation_reliability = fur_pixels > 0 ? reliable / fur_pixels : 0.0;
+  v.body_depth = defur::camera_depth(gpu, bald, v.crop);
+  return v;
+}
+
+}  // namespace nf::fur

@@ -1,0 +1,68 @@
+#pragma once
+// What the fur stage's image losses compare against, per camera: the view at the stage's rendering
+// resolution (the photo's longer side scaled to at most `max_side`), cropped to its mask's box
+// grown by a margin (no work on pixels far from the animal), with the camera shifted and scaled to
+// match. Targets per pixel of that crop, each the average over the photo pixels it covers:
+//   mask                the animal's mask (soft at the border)
+//   silhouette_weight   1 - mask (1 - nonbald): the silhouette loss sees fur and background, not
+//                       the bald parts of the animal (eyes, nose, pads), where no strand should be
+//   orientation_weight  mask x nonbald, eroded by `outline_px`: orientation is supervised on fur
+//                       only, away from the outline
+//   gabor_angle         the Gabor map of the full photo (engine/orient), averaged as doubled-angle
+//                       vectors weighted by confidence: a coarse pixel keeps the dominant orientation
+//   gabor_confidence    how far that orientation can be trusted, in [0, 1]: the coherence of the
+//                       Gabor orientations in a window of at least coherence_px photo pixels,
+//                       above the coherence as many random orientations would show (0). Gabor maps
+//                       of textureless fur (sub-pixel strands, smooth shading) answer noise with
+//                       confident but incoherent angles; this keeps them out of the loss
+//   orientation_reliability  the view's mean gabor_confidence over its fur: the orientation loss
+//                       of the view is scaled by it, so a photo without usable fur texture barely
+//                       pulls (the loss itself is normalised by its own weights, scale-free)
+//   body_depth          M_bald's depth (the rasteriser's occluder), +inf where no body
+//   rgb                 the photo (previews)
+#include <cstdint>
+#include <vector>
+
+#include "engine/geometry/mesh.hpp"
+#include "engine/io/image.hpp"
+#include "engine/io/scene.hpp"
+#include "engine/orient/gabor_bank.hpp"
+#include "engine/splat/rasterizer.hpp"
+
+namespace nf::gpu {
+class Context;
+}
+
+namespace nf::fur {
+
+struct FurViewOptions {
+  std::uint32_t max_side = 512;  // 0: the photo's own resolution
+  std::uint32_t margin_px = 8;   // at the rendering resolution
+  // Photo pixels nearer the mask's border than this carry no orientation target: there the Gabor
+  // filters answer the animal's outline against the background, not the fur (-1: the filters'
+  // radius, support x max(sigma_x, sigma_y)).
+  int outline_px = -1;
+  std::uint32_t coherence_px = 9;  // photo pixels: the orientation reliability's window
+  orient::GaborParams gabor;
+};
+
+struct FurView {
+  std::uint32_t camera = 0;
+  io::Camera crop;  // the cropped, scaled camera (width x height: the crop)
+  std::vector<float> mask, silhouette_weight, orientation_weight, gabor_angle, gabor_confidence, body_depth;
+  std::vector<float> rgb;  // the photo at the crop (3 per pixel), for previews
+  double orientation_reliability = 0;
+  std::uint64_t pixels() const { return std::uint64_t(crop.width) * crop.height; }
+};
+
+// `nonbald`: the defur stage's mask for this camera (full resolution), or empty for "all fur".
+// InputError naming the file when the photo or mask cannot be read or the mask is empty.
+FurView make_fur_view(gpu::Context& gpu, const io::Scene& scene, std::uint32_t camera, const io::Image* nonbald,
+                      const geometry::Mesh& bald, const FurViewOptions& options);
+
+// The cropped camera's projection scaled from the photo's pixel grid: (sx, sy) scale, (x0, y0) the
+// crop's corner at the new scale.
+io::Camera scaled_crop(const io::Camera& camera, double sx, double sy, std::uint32_t x0, std::uint32_t y0, std::uint32_t width,
+                       std::uint32_t height);
+
+}  // namespace nf::fur

@@ -1,0 +1,88 @@
+#include "engine/fur/ground_truth_inputs.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "engine/core/error.hpp"
+#include "engine/defur/vertex_fur.hpp"
+#include "engine/geometry/mesh_sdf.hpp"
+#include "engine/geometry/mesh_tools.hpp"
+#include "engine/geometry/point_index.hpp"
+#include "engine/geometry/surface_sampling.hpp"
+#include "engine/geometry/tangent_field.hpp"
+#include "engine/io/ground_truth.hpp"
+#include "engine/io/mesh.hpp"
+#include "engine/knowledge/knowledge.hpp"
+
+namespace nf::fur {
+namespace fs = std::filesystem;
+
+void set_surface_inputs(FurTrainingData& data, const geometry::Mesh& outer, const std::function<bool(std::int32_t)>& grows, unsigned seed) {
+  const geometry::SurfaceSamples samples = geometry::sample_surface(outer, 200000, seed);
+  data.surface_points.clear();
+  if (outer.regions.size() == outer.vertex_count() && grows) {
+    const geometry::PointIndex index(outer.positions);
+    for (std::size_t i = 0; i < samples.points.size() / 3; ++i)
+      if (grows(outer.regions[index.nearest(&samples.points[3 * i]).first]))
+        data.surface_points.insert(data.surface_points.end(), &samples.points[3 * i], &samples.points[3 * i] + 3);
+  } else {
+    data.surface_points = samples.points;
+  }
+  const geometry::Bounds b = geometry::mesh_bounds(outer);
+  const float longest = data.roots.size() ? *std::max_element(data.roots.length.begin(), data.roots.length.end()) : 0.f;
+  data.lo = b.lo - glm::vec3(longest), data.hi = b.hi + glm::vec3(longest);
+  data.scene_radius = 0.5 * double(glm::length(b.hi - b.lo));
+}
+
+GroundTruthInputs ground_truth_inputs(gpu::Context& gpu, const fs::path& scene_dir, const GroundTruthInputOptions& o) {
+  const std::optional<io::GroundTruth> gt = io::find_ground_truth(scene_dir);
+  if (!gt) throw InputError(scene_dir.string() + ": no ground truth (gt/scene.json); only `nf_gpu synth` scenes have one");
+  const io::Scene scene = io::read_scene(scene_dir);
+  GroundTruthInputs in;
+  in.bald = io::read_mesh(gt->bald());
+  in.outer = io::read_mesh(gt->outer());
+  if (in.bald.regions.size() != in.bald.vertex_count()) throw InputError(gt->bald().string() + ": no region per vertex");
+  const knowledge::Knowledge know = knowledge::read_knowledge(gt->knowledge());
+  glm::mat3 animal_to_world(1.f);
+  try {
+    const json& rows = gt->info.at("animal_to_world");
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) animal_to_world[c][r] = rows.at(std::size_t(r)).at(std::size_t(c)).get<float>();
+  } catch (const json::exception& e) {
+    throw InputError(gt->scene_json().string() + ": animal_to_world: " + e.what());
+  }
+  std::array<glm::vec3, body::kRegionCount> directions{};
+  for (int r = 0; r < body::kRegionCount; ++r)
+    if (know.has(body::Region(r))) {
+      const float e = float(o.heading_error_deg * M_PI / 180.0);
+      const glm::vec3 a = know.at(body::Region(r)).direction;  // animal frame: y up
+      const glm::vec3 turned(std::cos(e) * a.x + std::sin(e) * a.z, a.y, -std::sin(e) * a.x + std::cos(e) * a.z);
+      const glm::vec3 d = animal_to_world * turned;
+      directions[std::size_t(r)] = glm::length(d) > 0 ? glm::normalize(d) : d;
+    }
+  const double cm = gt->cm_per_unit;
+  const defur::VertexFur vertex_fur = defur::vertex_fur(in.bald, know, directions, cm, 20);
+
+  geometry::TangentFieldOptions field_options;
+  field_options.smoothing_length = o.smoothing_cm / cm;
+  const geometry::TangentField field = geometry::smooth_tangent_field(in.bald, face_growth_guides(in.bald, vertex_fur), field_options);
+  FurTrainingData& data = in.data;
+  data.roots = sample_roots(in.bald, {field.tangent, field.normal}, vertex_fur, o.roots, o.seed);
+  data.cm_per_unit = cm;
+  data.fur_area = fur_area(in.bald, vertex_fur);
+
+  geometry::SdfOptions sdf_options;
+  sdf_options.resolution = o.sdf_resolution;
+  sdf_options.band = 8.f * geometry::mesh_bounds(in.bald).longest() / float(sdf_options.resolution - 1);
+  const geometry::SignedDistanceGrid sdf = geometry::signed_distance_grid(in.bald, sdf_options, gt->bald().string());
+  data.bald_sdf = {sdf.grid, sdf.band, sdf.distance};
+  set_surface_inputs(data, in.outer, {}, o.seed);
+
+  for (std::uint32_t v = 0; v < scene.cameras.size(); ++v) {
+    const bool held = o.hold_out_every > 0 && v % std::uint32_t(o.hold_out_every) == std::uint32_t(o.hold_out_every) - 1;
+    (held ? data.held_out : data.train).push_back(make_fur_view(gpu, scene, v, nullptr, in.bald, o.views));
+  }
+  return in;
+}
+
+}  // namespace nf::fur

@@ -1,0 +1,419 @@
+#include "engine/pipeline/fur_stage.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "engine/core/atomic_file.hpp"
+#include "engine/core/error.hpp"
+#include "engine/core/interrupt.hpp"
+#include "engine/core/log.hpp"
+#include "engine/core/progress.hpp"
+#include "engine/core/stopwatch.hpp"
+#include "engine/defur/vertex_fur.hpp"
+#include "engine/fur/baseline_groom.hpp"
+#include "engine/fur/ground_truth_inputs.hpp"
+#include "engine/gpu/context.hpp"
+#include "engine/io/ground_truth.hpp"
+#include "engine/io/mesh.hpp"
+#include "engine/io/npz.hpp"
+#include "engine/io/strand_files.hpp"
+#include "engine/io/view_names.hpp"
+#include "engine/knowledge/knowledge.hpp"
+#include "engine/metrics/groom_scores.hpp"
+#include "engine/nn/weights_io.hpp"
+#include "engine/pipeline/body_stage.hpp"
+#include "engine/pipeline/checkpoint.hpp"
+#include "engine/pipeline/defur_stage.hpp"
+#include "engine/pipeline/frames_stage.hpp"
+#include "engine/pipeline/knowledge_stage.hpp"
+#include "engine/pipeline/preview_views.hpp"
+
+namespace nf::pipeline {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr int kStageVersion = 1;
+
+FurSettings settings_of(const StageContext& c) { return fur_settings().resolve(c.quality, c.settings.value("fur", json::object())); }
+
+// Training and held-out cameras (every k-th held out, as the NeuS stage does) that have a photo and
+// a mask.
+void split_views(const io::Scene& scene, int hold_out_every, std::vector<std::uint32_t>& train, std::vector<std::uint32_t>& held_out) {
+  for (std::uint32_t v = 0; v < scene.cameras.size(); ++v) {
+    const io::Camera& cam = scene.cameras[v];
+    if (cam.image.empty() || cam.mask.empty()) {
+      log::warn("fur: camera '", cam.name, "' has no ", cam.image.empty() ? "photo" : "mask", "; it is not used");
+      continue;
+    }
+    if (hold_out_every > 0 && v % std::uint32_t(hold_out_every) == std::uint32_t(hold_out_every) - 1)
+      held_out.push_back(v);
+    else
+      train.push_back(v);
+  }
+  if (train.empty() && !held_out.empty()) train.swap(held_out);  // a single view trains
+}
+
+fur::FaceFrames read_face_frames(const fs::path& file, std::size_t faces) {
+  fur::FaceFrames f;
+  for (auto [name, out] : {std::pair{"tangent", &f.tangent}, {"normal", &f.normal}}) {
+    const io::NpyArray a = io::read_npz_array(file, name);
+    if (a.shape.size() != 2 || a.shape[0] != faces || a.shape[1] != 3)
+      throw InputError(file.string() + ": array '" + name + "' should be " + std::to_string(faces) + " x 3 (one per face of defur/bald.ply); rerun the frames stage");
+    out->resize(faces);
+    for (std::size_t i = 0; i < faces; ++i) (*out)[i] = glm::vec3(a.values[3 * i], a.values[3 * i + 1], a.values[3 * i + 2]);
+  }
+  return f;
+}
+
+// The groom over the photo: orientation as hue (doubled angle, as `nf_gpu orient` draws it) where
+// the strands cover the pixel, the photo elsewhere; beside it the Gabor map of the photo.
+io::Image preview_image(const fur::FurView& v, const std::vector<float>& image) {
+  const std::uint32_t W = v.crop.width, H = v.crop.height;
+  const std::uint64_t px = v.pixels();
+  io::Image out{2 * W, H, 3, std::vector<float>(std::size_t(2) * px * 3, 0.f)};
+  const auto hue = [](double angle, float* rgb) {
+    const double h = std::fmod(angle / M_PI, 1.0) * 6.0;
+    const double x = 1.0 - std::abs(std::fmod(h, 2.0) - 1.0);
+    const double table[6][3] = {{1, x, 0}, {x, 1, 0}, {0, 1, x}, {0, x, 1}, {x, 0, 1}, {1, 0, x}};
+    for (int c = 0; c < 3; ++c) rgb[c] = float(table[std::min(5, int(h))][c]);
+  };
+  for (std::uint32_t y = 0; y < H; ++y)
+    for (std::uint32_t x = 0; x < W; ++x) {
+      const std::size_t p = std::size_t(y) * W + x;
+      float* left = &out.pixels[(std::size_t(y) * 2 * W + x) * 3];
+      float* right = &out.pixels[(std::size_t(y) * 2 * W + W + x) * 3];
+      float c[3];
+      hue(0.5 * std::atan2(double(image[2 * px + p]), double(image[px + p])) + M_PI, c);
+      const float a = std::clamp(image[p], 0.f, 1.f);
+      for (int ch = 0; ch < 3; ++ch) left[ch] = (1 - a) * v.rgb[3 * p + std::size_t(ch)] + a * c[ch];
+      float g[3];
+      hue(v.gabor_angle[p], g);
+      const float conf = v.gabor_confidence[p];
+      for (int ch = 0; ch < 3; ++ch) right[ch] = conf * g[ch] * (v.mask[p] > 0.5f ? 1.f : 0.f);
+    }
+  return out;
+}
+
+json step_json(const fur::FurStepReport& r) { return fur::to_json(r); }
+
+}  // namespace
+
+FurSettings fur_quality_preset(const std::string& quality) {
+  FurSettings s;
+  if (quality == "draft") {
+    s.training.steps = 300, s.training.strands = 4000, s.training.warm_steps = 50, s.resolution = 256;
+    s.training.checkpoint_interval = 100, s.strands = 200000, s.metric_strands = 10000;
+  } else if (quality == "paper") {
+    s.training.steps = 20000, s.training.strands = 15000, s.training.warm_steps = 200, s.resolution = 0;
+    s.training.checkpoint_interval = 500, s.metric_strands = 100000;
+  }
+  return s;
+}
+
+std::vector<fs::path> FurStage::inputs(const StageContext& c) const {
+  const DefurOutputs d = defur_outputs(c.work);
+  const FramesOutputs f = frames_outputs(c.work);
+  const KnowledgeOutputs k = knowledge_outputs(c.work);
+  std::vector<fs::path> files{d.bald(), d.vertex_fur(), d.bald_sdf(), f.frames(), f.roots(), k.scale(), k.knowledge(),
+                              body_outputs(c.work).outer_regions()};
+  std::vector<std::uint32_t> views(c.scene.cameras.size());
+  for (std::uint32_t v = 0; v < views.size(); ++v) views[v] = v;
+  const std::vector<std::string> names = io::view_file_names(c.scene, views);
+  for (std::uint32_t v = 0; v < views.size(); ++v) {
+    const io::Camera& cam = c.scene.cameras[v];
+    if (!cam.image.empty()) files.push_back(cam.image);
+    if (!cam.mask.empty()) files.push_back(cam.mask);
+    const fs::path nonbald = d.masks() / (names[v] + ".png");
+    if (fs::exists(nonbald)) files.push_back(nonbald);
+  }
+  if (const auto gt = io::find_ground_truth(c.scene_dir))
+    for (const fs::path& p : {gt->strands(), gt->outer()})
+      if (fs::exists(p)) files.push_back(p);
+  return files;
+}
+
+json FurStage::parameters(const StageContext& c) const {
+  return {{"stage_version", kStageVersion}, {"settings", fur_settings().values(c.quality, c.settings.value("fur", json::object()))}};
+}
+
+json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& resume) {
+  const FurSettings s = settings_of(c);
+  const FurOutputs out{out_dir};
+  const DefurOutputs d = defur_outputs(c.work);
+  const FramesOutputs f = frames_outputs(c.work);
+  const Stopwatch t_all;
+  json seconds = json::object();
+  Stopwatch t;
+
+  const geometry::Mesh bald = io::read_mesh(d.bald());
+  const defur::VertexFur vertex_fur = defur::read_vertex_fur(d.vertex_fur(), bald.vertex_count());
+  const double cm = read_metric_scale(knowledge_outputs(c.work));
+  const knowledge::Knowledge knowledge = knowledge::read_knowledge(knowledge_outputs(c.work).knowledge());
+  fur::FurTrainingData data;
+  data.roots = fur::read_roots(f.roots());
+  data.cm_per_unit = cm;
+  write_file_atomic(out.scale(), json{{"cm_per_unit", cm}, {"source", "knowledge/scale.json"}}.dump(2) + "\n");
+
+  if (data.roots.size() == 0) {
+    log::warn("fur: every region of the knowledge is bald, so there is no fur to grow; writing an empty groom");
+    io::write_uniform_hair(out.strands(), 0, fur::kStrandPoints, [](const auto&) {});
+    io::write_npz(out.regions(), {{"region", {0}, "<i4", {}}});
+    json summary{{"strands", 0}, {"note", "every region is bald: no strands"}};
+    write_file_atomic(out.metrics(), summary.dump(2) + "\n");
+    return summary;
+  }
+
+  const geometry::Mesh outer = io::read_mesh(body_outputs(c.work).outer_regions());
+  const defur::SdfFile sdf = defur::read_sdf_file(d.bald_sdf());
+  data.bald_sdf = sdf;
+  fur::set_surface_inputs(data, outer, [&](std::int32_t r) { return knowledge.grows_fur(body::Region(r)); }, s.training.seed);
+  data.fur_area = fur::fur_area(bald, vertex_fur);
+  seconds["read"] = t.seconds();
+
+  // The views: targets at the stage's resolution, cropped to the masks.
+  t.restart();
+  std::vector<std::uint32_t> train_ids, held_ids;
+  split_views(c.scene, s.hold_out_every, train_ids, held_ids);
+  std::vector<std::uint32_t> all(c.scene.cameras.size());
+  for (std::uint32_t v = 0; v < all.size(); ++v) all[v] = v;
+  const std::vector<std::string> names = io::view_file_names(c.scene, all);
+  fur::FurViewOptions view_options;
+  view_options.max_side = s.resolution, view_options.margin_px = s.margin_px;
+  const auto make_views = [&](const std::vector<std::uint32_t>& ids, std::vector<fur::FurView>& views) {
+    for (std::uint32_t v : ids) {
+      const fs::path nonbald_file = d.masks() / (names[v] + ".png");
+      const std::optional<io::Image> nonbald = fs::exists(nonbald_file) ? std::optional(io::read_image(nonbald_file)) : std::nullopt;
+      views.push_back(fur::make_fur_view(c.gpu, c.scene, v, nonbald ? &*nonbald : nullptr, bald, view_options));
+    }
+  };
+  make_views(train_ids, data.train);
+  make_views(held_ids, data.held_out);
+  std::uint64_t rendered = 0, full = 0;
+  for (const fur::FurView& v : data.train) rendered += v.pixels(), full += std::uint64_t(c.scene.cameras[v.camera].width) * c.scene.cameras[v.camera].height;
+  seconds["views"] = t.seconds();
+  double reliability = 0;
+  for (const fur::FurView& v : data.train) reliability += v.orientation_reliability / double(data.train.size());
+  log::info("fur: the photos' orientation maps are ", 100.0 * reliability, " % reliable on the fur (their coherence above noise)");
+  log::info("fur: ", data.roots.size(), " roots, ", data.train.size(), " training views and ", data.held_out.size(),
+            " held out; rendering ", rendered / std::max<std::size_t>(1, data.train.size()), " pixels a view (",
+            full ? 100.0 * double(rendered) / double(full) : 0.0, " % of the photos' pixels)");
+  if (data.train.empty()) log::warn("fur: no view has a photo and a mask; only the geometric losses will shape the fur");
+
+  // Training, resumable.
+  t.restart();
+  std::unique_ptr<fur::StrandPrior> prior = fur::shipped_strand_prior(c.gpu);
+  auto make_trainer = [&] { return std::make_unique<fur::FurTrainer>(c.gpu, data, *prior, s.field, s.training); };
+  std::unique_ptr<fur::FurTrainer> trainer = make_trainer();
+  const fs::path checkpoint = resume / "checkpoint.nfwt";
+  if (resume_or_discard("fur", checkpoint, [&] { return trainer->load_checkpoint(checkpoint); },
+                        [&] {
+                          prior = fur::shipped_strand_prior(c.gpu);
+                          trainer = make_trainer();
+                        }))
+    log::info("fur: resuming from ", checkpoint.string(), " at step ", trainer->step());
+  log::info("fur: ", s.training.steps, " steps of ", std::min<std::size_t>(s.training.strands, data.roots.size()), " strands (", s.training.warm_steps,
+            " warm-up), strand width ", trainer->strand_width(trainer->batch()) * cm * 10.0, " mm");
+  Progress progress("fur", s.training.steps);
+  trainer->train(s.training.steps, checkpoint, [&](const fur::FurStepReport& r) {
+    char status[200];
+    if (r.warm)
+      std::snprintf(status, sizeof status, "warm-up: direction %.4f penetration %.2e", r.direction, r.penetration);
+    else
+      std::snprintf(status, sizeof status, "loss %.4f sil %.3f orient %.4f chamfer %.2e", r.loss, r.silhouette, r.orientation, r.chamfer);
+    progress.update(r.step, status);
+    return !interrupted();
+  });
+  if (interrupted()) {
+    trainer->save_checkpoint(checkpoint);
+    progress.finish("stopped");
+    throw Interrupted("fur: stopped at step " + std::to_string(trainer->step()) + " of " + std::to_string(s.training.steps) +
+                      "; checkpoint saved in " + checkpoint.string());
+  }
+  progress.finish();
+  seconds["train"] = t.seconds();
+  std::string curve;
+  for (const fur::FurStepReport& r : trainer->history()) curve += step_json(r).dump() + "\n";
+  write_file_atomic(out.training(), curve);
+
+  nn::WeightsFile model;
+  const fur::RootBox& box = trainer->field().box();
+  model.config = {{"kind", "fur field"},
+                  {"field", s.field.to_json()},
+                  {"latent", prior->config().latent},
+                  {"box", {{"lo", {box.lo.x, box.lo.y, box.lo.z}}, {"hi", {box.hi.x, box.hi.y, box.hi.z}}}},
+                  {"steps", trainer->step()},
+                  {"train_decoder", s.training.train_decoder}};
+  std::vector<float> params = trainer->field().parameters();
+  model.tensors.push_back({"field", {params.size()}, std::move(params)});
+  if (s.training.train_decoder) {
+    std::vector<float> dec = prior->decoder().parameters().download();
+    model.tensors.push_back({"decoder", {dec.size()}, std::move(dec)});
+  }
+  nn::save_weights(out.model(), model);
+
+  // Held-out views.
+  t.restart();
+  const std::uint32_t score_strands = s.score_strands ? s.score_strands : s.training.strands;
+  json held = json::array();
+  double iou = 0, orient_err = 0;
+  std::vector<std::vector<float>> held_images;
+  for (const fur::FurView& v : data.held_out) {
+    held_images.push_back(trainer->render(v, score_strands, s.training.seed + 7));
+    const fur::ViewScore score = fur::score_view(v, held_images.back());
+    held.push_back({{"camera", c.scene.cameras[v.camera].name}, {"silhouette_iou", score.silhouette_iou},
+                    {"orientation_error_deg", score.orientation_error_deg}, {"pixels", score.pixels}});
+    iou += score.silhouette_iou, orient_err += score.orientation_error_deg;
+  }
+  if (!data.held_out.empty()) iou /= double(data.held_out.size()), orient_err /= double(data.held_out.size());
+  seconds["held_out"] = t.seconds();
+
+  // Inference: the roots file when the count matches, else as many roots drawn anew.
+  t.restart();
+  fur::Roots infer_roots;
+  const fur::Roots* roots = &data.roots;
+  if (s.strands != data.roots.size()) {
+    infer_roots = fur::sample_roots(bald, read_face_frames(f.frames(), bald.triangle_count()), vertex_fur, s.strands, s.training.seed + 11);
+    roots = &infer_roots;
+  }
+  const std::uint32_t n = std::uint32_t(roots->size());
+  std::vector<std::uint32_t> ids(n);
+  for (std::uint32_t i = 0; i < n; ++i) ids[i] = i;
+  // Every k-th strand for the metrics: the roots are stratified over the fur's area, so this is a
+  // uniform subset.
+  const std::uint32_t every = std::max<std::uint32_t>(1, n / std::max<std::uint32_t>(1, s.metric_strands));
+  std::vector<float> sample_xyz;
+  std::vector<std::uint32_t> sample_ids;
+  io::write_uniform_hair(out.strands(), n, fur::kStrandPoints, [&](const auto& write) {
+    trainer->field().infer(*roots, ids, 65536, [&](std::size_t first, std::uint32_t count, const std::vector<float>& points, const std::vector<float>&) {
+      write(std::span<const float>(points));
+      for (std::uint32_t k = 0; k < count; ++k)
+        if ((first + k) % every == 0) {
+          sample_ids.push_back(std::uint32_t(first + k));
+          sample_xyz.insert(sample_xyz.end(), points.begin() + std::ptrdiff_t(std::size_t(k) * fur::kStrandPoints * 3),
+                            points.begin() + std::ptrdiff_t(std::size_t(k + 1) * fur::kStrandPoints * 3));
+        }
+    });
+  });
+  {
+    io::NpyWrite regions{"region", {n}, "<i4", {}};
+    regions.values.reserve(n);
+    for (std::uint32_t i = 0; i < n; ++i) regions.values.push_back(roots->region[i]);
+    io::write_npz(out.regions(), {regions});
+  }
+  seconds["inference"] = t.seconds();
+  log::info("fur: ", n, " strands inferred and written in ", seconds["inference"].get<double>(), " s");
+
+  // Scores: the groom and the baseline groom (straight, lifted, on the same roots).
+  t.restart();
+  const io::StrandSet groom = io::StrandSet::uniform(std::uint32_t(sample_ids.size()), fur::kStrandPoints, std::move(sample_xyz));
+  const io::StrandSet baseline = fur::baseline_groom(*roots, sample_ids, s.training.lying_angle_deg);
+  const metrics::StrandSample groom_sample = metrics::sample_strands(groom, s.metric_strands, s.metric_points, 1);
+  const metrics::StrandSample baseline_sample = metrics::sample_strands(baseline, s.metric_strands, s.metric_points, 1);
+  metrics::GroomTruth truth;
+  std::optional<metrics::StrandSample> gt_sample;
+  std::optional<geometry::Mesh> gt_outer;
+  json gt_info;
+  if (const auto gt = io::find_ground_truth(c.scene_dir)) {
+    if (fs::exists(gt->strands())) gt_sample = metrics::sample_strands(io::read_hair(gt->strands()), s.metric_strands, s.metric_points, 2);
+    if (fs::exists(gt->outer())) gt_outer = io::read_mesh(gt->outer());
+    truth.strands = gt_sample ? &*gt_sample : nullptr;
+    truth.outer = gt_outer ? &*gt_outer : nullptr;
+    gt_info = {{"strands", "gt/strands.hair"}, {"outer", "gt/outer.ply"}};
+    if (std::abs(gt->cm_per_unit - cm) > 1e-3 * gt->cm_per_unit)
+      log::warn("fur: the knowledge's scale (", cm, " cm per unit) differs from the ground truth's (", gt->cm_per_unit, "); metrics use the knowledge's");
+  }
+  const json groom_scores = metrics::groom_scores(groom_sample, truth, cm);
+  const json baseline_scores = metrics::groom_scores(baseline_sample, truth, cm);
+  seconds["metrics"] = t.seconds();
+  if (groom_scores.contains("fscore"))
+    log::info("fur: F-score at (2 cm, 20 deg) ", groom_scores["fscore"].value("2cm_20deg", 0.0), " (baseline ",
+              baseline_scores["fscore"].value("2cm_20deg", 0.0), "); at (2 mm, 20 deg) ", groom_scores["fscore"].value("2mm_20deg", 0.0),
+              " (baseline ", baseline_scores["fscore"].value("2mm_20deg", 0.0), ")");
+
+  // Previews: the held-out views (else the first training views).
+  t.restart();
+  json previews = json::array();
+  if (s.preview_views > 0) {
+    fs::create_directories(out.previews());
+    const std::vector<fur::FurView>& source = data.held_out.empty() ? data.train : data.held_out;
+    for (std::size_t i = 0; i < source.size() && previews.size() < std::size_t(s.preview_views); ++i) {
+      const std::vector<float> image = i < held_images.size() && !data.held_out.empty() ? held_images[i] : trainer->render(source[i], score_strands, s.training.seed + 7);
+      const fs::path file = out.previews() / (names[source[i].camera] + ".png");
+      io::write_png(file, preview_image(source[i], image));
+      previews.push_back(file.filename().string());
+    }
+  }
+  seconds["previews"] = t.seconds();
+
+  const fur::FurStepReport last = trainer->last_report();
+  json summary{{"strands", n},
+               {"steps", trainer->step()},
+               {"training_strands_per_step", std::min<std::size_t>(s.training.strands, data.roots.size())},
+               {"strand_width_mm", trainer->strand_width(trainer->batch()) * cm * 10.0},
+               {"skipped_steps", last.skipped_steps},
+               {"final", fur::to_json(last)},
+               {"views", {{"train", data.train.size()}, {"held_out", data.held_out.size()}, {"orientation_reliability", reliability},
+                          {"rendered_pixels_per_view", rendered / std::max<std::size_t>(1, data.train.size())},
+                          {"rendered_fraction_of_photo", full ? double(rendered) / double(full) : 0.0}}},
+               {"held_out", {{"views", held}, {"silhouette_iou", iou}, {"orientation_error_deg", orient_err}}},
+               {"groom", groom_scores},
+               {"baseline", baseline_scores},
+               {"previews", previews},
+               {"seconds", seconds},
+               {"seconds_per_step", trainer->step() ? last.seconds / trainer->step() : 0.0},
+               {"peak_device_bytes", c.gpu.peak_allocated_bytes()}};
+  if (!gt_info.is_null()) summary["ground_truth"] = gt_info;
+  summary["seconds_total"] = t_all.seconds();
+  write_file_atomic(out.metrics(), summary.dump(2) + "\n");
+  return summary;
+}
+
+const SettingsSchema<FurSettings>& fur_settings() {
+  using F = FurSettings;
+  static const SettingsSchema<F> schema = [] {
+    SettingsSchema<F> s("fur", fur_quality_preset);
+    s.add("steps", [](F& f) -> auto& { return f.training.steps; }, 0, 1e8, "optimisation steps (warm-up included)")
+        .add("batch", [](F& f) -> auto& { return f.training.strands; }, 1, 1e7, "strands (random roots) per step")
+        .add("warm_steps", [](F& f) -> auto& { return f.training.warm_steps; }, 0, 1e8,
+             "first steps with the geometric losses only (growth direction, penetration)")
+        .add("warm_start", [](F& f) -> auto& { return f.training.warm_start; }, 0, 1,
+             "start the field at the straight strand lifted by lying_angle_deg (else: random weights)")
+        .add("lying_angle_deg", [](F& f) -> auto& { return f.training.lying_angle_deg; }, 0, 90,
+             "the warm start's and the baseline groom's angle between strand and skin")
+        .add("lr", [](F& f) -> auto& { return f.training.lr; }, 1e-7, 1, "AdamW learning rate, cosine decay to lr_floor x lr")
+        .add("lr_floor", [](F& f) -> auto& { return f.training.lr_floor; }, 0, 1, "the last step's share of lr")
+        .add("weight_decay", [](F& f) -> auto& { return f.training.weight_decay; }, 0, 1, "AdamW weight decay")
+        .add("silhouette_weight", [](F& f) -> auto& { return f.training.weights.silhouette; }, 0, 1e9, "silhouette L1 (0: off)")
+        .add("orientation_weight", [](F& f) -> auto& { return f.training.weights.orientation; }, 0, 1e9,
+             "orientation against the Gabor maps with rendered confidence (0: off)")
+        .add("direction_weight", [](F& f) -> auto& { return f.training.weights.direction; }, 0, 1e9,
+             "growth direction against the knowledge (0: off)")
+        .add("chamfer_weight", [](F& f) -> auto& { return f.training.weights.chamfer; }, 0, 1e9,
+             "one-way chamfer M_NeuS -> strands, in the unit-sphere normalisation (0: off)")
+        .add("penetration_weight", [](F& f) -> auto& { return f.training.weights.penetration; }, 0, 1e9,
+             "penetration into M_bald, in the unit-sphere normalisation (0: off)")
+        .add("curvature_weight", [](F& f) -> auto& { return f.training.weights.curvature; }, 0, 1e9, "curvature consistency (0: off)")
+        .add("chamfer_queries", [](F& f) -> auto& { return f.training.chamfer_queries; }, 0, 1e7, "points of M_NeuS per step")
+        .add("strand_width", [](F& f) -> auto& { return f.training.strand_width; }, 0, 1,
+             "splat sigma across a strand in units of the scene radius (0: from the data, see coverage)")
+        .add("coverage", [](F& f) -> auto& { return f.training.coverage; }, 1e-3, 1e3,
+             "with strand_width 0: how many times a step's strands cover the fur (sets their width)")
+        .add("train_decoder", [](F& f) -> auto& { return f.training.train_decoder; }, 0, 1, "fine-tune the strand prior's decoder too")
+        .add("resolution", [](F& f) -> auto& { return f.resolution; }, 0, 65536, "longer side of the rendered views in pixels (0: the photos')")
+        .add("margin_px", [](F& f) -> auto& { return f.margin_px; }, 0, 4096, "pixels rendered around each view's mask box")
+        .add("hold_out_every", [](F& f) -> auto& { return f.hold_out_every; }, 0, 1000, "every k-th camera is held out for scoring (0: none)")
+        .add("strands", [](F& f) -> auto& { return f.strands; }, 0, 4e7, "strands inferred into strands.hair")
+        .add("metric_strands", [](F& f) -> auto& { return f.metric_strands; }, 1, 1e7, "strands the metrics compare")
+        .add("metric_points", [](F& f) -> auto& { return f.metric_points; }, 2, 1000, "points per strand the metrics compare")
+        .add("preview_views", [](F& f) -> auto& { return f.preview_views; }, 0, 100, "previews written")
+        .add("checkpoint_interval", [](F& f) -> auto& { return f.training.checkpoint_interval; }, 0, 1e8,
+             "steps between checkpoints (0: none; Ctrl-C always saves one)")
+        .add("seed", [](F& f) -> auto& { return f.training.seed; }, 0, 4294967295.0, "random seed (initialisation, roots, views)")
+        .check([](const F& f) { f.training.validate(); });
+    return s;
+  }();
+  return schema;
+}
+
+}  // namespace nf::pipeline

@@ -1,0 +1,48 @@
+#pragma once
+// The fur stage (`fur`): the neural fur field optimised through strand splatting with the paper's
+// six losses (fur/fur_trainer.hpp), then inference of any number of strands streamed to
+// strands.hair. Its files are FurOutputs below; `nf_gpu reconstruct --help-stage fur` lists its
+// settings.
+#include "engine/fur/fur_trainer.hpp"
+#include "engine/pipeline/stage.hpp"
+
+namespace nf::pipeline {
+
+struct FurOutputs {
+  std::filesystem::path dir;
+  std::filesystem::path strands() const { return dir / "strands.hair"; }    // the groom, scene units, 100 points per strand
+  std::filesystem::path regions() const { return dir / "regions.npz"; }     // `region` (i4) per strand of strands.hair
+  std::filesystem::path scale() const { return dir / "scale.json"; }        // cm per scene unit (nf_gpu metrics reads it)
+  std::filesystem::path model() const { return dir / "model.nfwt"; }        // the fur field's weights, box and configuration
+  std::filesystem::path training() const { return dir / "training.jsonl"; } // the loss curve: every 10th step
+  std::filesystem::path metrics() const { return dir / "metrics.json"; }    // the stage summary
+  std::filesystem::path previews() const { return dir / "previews"; }       // the groom over held-out photos
+};
+inline FurOutputs fur_outputs(const std::filesystem::path& work) { return {work / "fur"}; }
+
+struct FurSettings {
+  fur::FurTrainingOptions training;
+  fur::FurFieldConfig field;
+  std::uint32_t resolution = 512;   // longer side of the rendered views (0: the photos')
+  std::uint32_t margin_px = 8;
+  int hold_out_every = 5;
+  std::uint32_t strands = 500000;   // inferred
+  std::uint32_t metric_points = 25;     // per strand, resampled along its arc length
+  std::uint32_t metric_strands = 20000;  // the paper compares 100,000 (preset paper); the mm thresholds cost ~N^2
+  std::uint32_t score_strands = 0;  // strands rendered to score held-out views (0: the training batch)
+  int preview_views = 3;
+};
+FurSettings fur_quality_preset(const std::string& quality);
+const SettingsSchema<FurSettings>& fur_settings();
+
+class FurStage : public Stage {
+ public:
+  std::string name() const override { return "fur"; }
+  std::vector<std::string> depends_on() const override { return {"frames"}; }
+  const StageSettings& settings() const override { return fur_settings(); }
+  std::vector<std::filesystem::path> inputs(const StageContext& context) const override;
+  json parameters(const StageContext& context) const override;
+  json run(StageContext& context, const std::filesystem::path& out, const std::filesystem::path& resume) override;
+};
+
+}  // namespace nf::pipeline

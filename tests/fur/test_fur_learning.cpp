@@ -1,0 +1,88 @@
+// The fur stage learns from the photos: on a small synthetic cat whose fur starts wrong in a known
+// way (the warm start lifts every strand 60 degrees off the skin; the true fur leaves the skin at
+// about 32 degrees and lies down towards the tip), a few hundred steps of the fur field through
+// strand splatting must raise the F-score against the true strands well above that baseline groom,
+// and the held-out silhouette must not get worse. Inputs come from the scene's ground truth (bald
+// body, envelope, knowledge), so the test measures the optimisation alone, with the default loss
+// weights.
+#include <doctest/doctest.h>
+
+#include <cstdio>
+#include <filesystem>
+
+#include "engine/fur/baseline_groom.hpp"
+#include "engine/fur/ground_truth_inputs.hpp"
+#include "engine/io/ground_truth.hpp"
+#include "engine/io/strand_files.hpp"
+#include "engine/metrics/groom_scores.hpp"
+#include "engine/synth/synth_scene.hpp"
+#include "tests/support/gpu_test.hpp"
+
+using namespace nf;
+using namespace nf::fur;
+namespace fs = std::filesystem;
+
+namespace {
+
+double fscore(const metrics::StrandSample& groom, const metrics::StrandSample& truth, double cm, metrics::MatchThreshold t) {
+  for (const metrics::MatchScore& s : metrics::match_scores(groom, truth, {t}, cm))
+    if (s.directed) return s.fscore;
+  return 0;
+}
+
+double held_out_iou(FurTrainer& trainer, const FurTrainingData& data) {
+  double sum = 0;
+  for (const FurView& v : data.held_out) sum += score_view(v, trainer.render(v, trainer.batch(), 5)).silhouette_iou;
+  return sum / double(data.held_out.size());
+}
+
+}  // namespace
+
+TEST_CASE("fur learning: a few hundred steps bring strands lifted too far back onto the fur the photos show") {
+  gpu::Context& ctx = test::context();
+  const fs::path dir = fs::temp_directory_path() / "nf_test_fur_learning";
+  fs::remove_all(dir);
+  synth::SynthOptions so;
+  so.animal = "cat", so.views = 10, so.resolution = 160, so.strands = 30000, so.samples_per_axis = 1, so.seed = 4;
+  synth::synthesize_scene(dir / "scene", so);
+
+  GroundTruthInputOptions gi;
+  gi.roots = 30000, gi.views.max_side = 160, gi.sdf_resolution = 64;
+  const GroundTruthInputs in = ground_truth_inputs(ctx, dir / "scene", gi);
+  REQUIRE(in.data.train.size() == 8);
+  REQUIRE(in.data.held_out.size() == 2);
+
+  FurTrainingOptions o;
+  o.steps = 250, o.strands = 3000, o.warm_steps = 20, o.checkpoint_interval = 0, o.chamfer_queries = 3000;
+  o.lying_angle_deg = 60;
+  std::unique_ptr<StrandPrior> prior = shipped_strand_prior(ctx);
+  FurTrainer trainer(ctx, in.data, *prior, {}, o);
+  trainer.train(o.warm_steps);
+  const double iou_before = held_out_iou(trainer, in.data);
+  trainer.train(o.steps);
+  const double iou_after = held_out_iou(trainer, in.data);
+  CHECK(trainer.step() == o.steps);
+  CHECK(trainer.last_report().skipped_steps == 0);
+
+  // The groom and the baseline (the warm start's strands) on the same 3000 roots, against the truth.
+  const double cm = in.data.cm_per_unit;
+  const std::vector<std::uint32_t> ids = sample_indices(in.data.roots.size(), 3000, 17);
+  std::vector<float> xyz;
+  trainer.field().infer(in.data.roots, ids, 1024, [&](std::size_t, std::uint32_t, const std::vector<float>& p, const std::vector<float>&) {
+    xyz.insert(xyz.end(), p.begin(), p.end());
+  });
+  const metrics::StrandSample groom = metrics::sample_strands(io::StrandSet::uniform(3000, kStrandPoints, xyz), 3000, 25, 1);
+  const metrics::StrandSample baseline = metrics::sample_strands(baseline_groom(in.data.roots, ids, o.lying_angle_deg), 3000, 25, 1);
+  const metrics::StrandSample truth = metrics::sample_strands(io::read_hair(io::find_ground_truth(dir / "scene")->strands()), 10000, 25, 2);
+  const double f_groom = fscore(groom, truth, cm, {2.0, 20.0}), f_base = fscore(baseline, truth, cm, {2.0, 20.0});
+  const double f_groom_mm = fscore(groom, truth, cm, {0.3, 30.0}), f_base_mm = fscore(baseline, truth, cm, {0.3, 30.0});
+  char line[256];
+  std::snprintf(line, sizeof line, "F(2 cm, 20 deg) %.1f -> %.1f; F(3 mm, 30 deg) %.1f -> %.1f; held-out silhouette IoU %.3f -> %.3f",
+                f_base, f_groom, f_base_mm, f_groom_mm, iou_before, iou_after);
+  MESSAGE(line);
+  // Measured: 35.9 -> 62.3 and 5.6 -> 16.0 (the margins leave room for float-atomic and device noise).
+  CHECK(f_groom >= f_base + 15.0);
+  CHECK(f_groom_mm >= f_base_mm + 5.0);
+  CHECK(iou_after >= iou_before - 0.02);
+  fs::remove_all(dir);
+}
