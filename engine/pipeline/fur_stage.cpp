@@ -232,6 +232,14 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
   }
   progress.finish();
   seconds["train"] = t.seconds();
+  // After training, Ctrl-C or a kill stops at the next chunk of work with the trained state saved:
+  // the same command then resumes at the last step and only redoes what follows.
+  const auto stop_if_interrupted = [&](const char* during) {
+    if (!interrupted()) return;
+    trainer->save_checkpoint(checkpoint);
+    throw Interrupted(std::string("fur: stopped during ") + during + " after " + std::to_string(trainer->step()) +
+                      " steps; checkpoint saved in " + checkpoint.string());
+  };
   std::string curve;
   for (const fur::FurStepReport& r : trainer->history()) curve += step_json(r).dump() + "\n";
   write_file_atomic(out.training(), curve);
@@ -259,6 +267,7 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
   double iou = 0, orient_err = 0;
   std::vector<std::vector<float>> held_images;
   for (const fur::FurView& v : data.held_out) {
+    stop_if_interrupted("scoring");
     held_images.push_back(trainer->render(v, score_strands, s.training.seed + 7));
     const fur::ViewScore score = fur::score_view(v, held_images.back());
     held.push_back({{"camera", c.scene.cameras[v.camera].name}, {"silhouette_iou", score.silhouette_iou},
@@ -286,6 +295,7 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
   std::vector<std::uint32_t> sample_ids;
   io::write_uniform_hair(out.strands(), n, fur::kStrandPoints, [&](const auto& write) {
     trainer->field().infer(*roots, ids, 65536, [&](std::size_t first, std::uint32_t count, const std::vector<float>& points, const std::vector<float>&) {
+      stop_if_interrupted("inference");  // the partial file is removed
       write(std::span<const float>(points));
       for (std::uint32_t k = 0; k < count; ++k)
         if ((first + k) % every == 0) {
@@ -305,6 +315,7 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
   log::info("fur: ", n, " strands inferred and written in ", seconds["inference"].get<double>(), " s");
 
   // Scores: the groom and the baseline groom (straight, lifted, on the same roots).
+  stop_if_interrupted("the scores");
   t.restart();
   const io::StrandSet groom = io::StrandSet::uniform(std::uint32_t(sample_ids.size()), fur::kStrandPoints, std::move(sample_xyz));
   const io::StrandSet baseline = fur::baseline_groom(*roots, sample_ids, s.training.lying_angle_deg);
