@@ -2,11 +2,15 @@
 // arrays its bit field announces, in order: segments (uint16 per strand), points, thickness,
 // transparency, colours (float32).
 #include <cmath>
+#include <algorithm>
 #include <cstring>
+#include <fstream>
+#include <memory>
 
 #include "engine/core/atomic_file.hpp"
 #include "engine/io/binary_io.hpp"
 #include "engine/io/strand_files.hpp"
+#include "engine/io/strand_stream.hpp"
 
 namespace nf::io {
 namespace {
@@ -63,33 +67,111 @@ void write_hair(const std::filesystem::path& path, const StrandSet& s) {
 
 void write_uniform_hair(const std::filesystem::path& path, std::uint32_t strands, std::uint32_t points_per_strand,
                         const std::function<void(const std::function<void(std::span<const float>)>&)>& produce) {
-  if (points_per_strand < 1 || points_per_strand > 65536)
-    throw InputError(path.string() + ": " + std::to_string(points_per_strand) + " points per strand; .hair stores 1..65536");
-  const std::uint64_t points = std::uint64_t(strands) * points_per_strand;
-  if (points > 0xffffffffull) throw InputError(path.string() + ": " + std::to_string(points) + " points exceed the .hair header's 32-bit count");
+  StrandStream stream;
+  stream.strands = strands;
+  stream.points = std::uint64_t(strands) * points_per_strand;
+  stream.points_in = [points_per_strand](std::uint64_t) { return points_per_strand; };
+  stream.each_chunk = produce;
+  write_hair(path, stream);
+}
+
+void write_hair(const std::filesystem::path& path, const StrandStream& s) {
+  if (s.points > 0xffffffffull || s.strands > 0xffffffffull)
+    throw InputError(path.string() + ": " + std::to_string(s.strands) + " strands of " + std::to_string(s.points) +
+                     " points exceed the .hair header's 32-bit counts");
+  // One segment count for all strands goes in the header; otherwise the segments array.
+  bool uniform = true;
+  std::uint32_t first_count = s.strands ? s.points_in(0) : 1;
+  std::uint64_t total = 0;
+  for (std::uint64_t i = 0; i < s.strands; ++i) {
+    const std::uint32_t n = s.points_in(i);
+    if (n < 1 || n > 65536)
+      throw InputError(path.string() + ": strand " + std::to_string(i) + " has " + std::to_string(n) + " points; .hair stores 1..65536 per strand");
+    uniform = uniform && n == first_count;
+    total += n;
+  }
+  if (total != s.points) throw InternalError(path.string() + ": the strands hold " + std::to_string(total) + " points, not " + std::to_string(s.points));
   HairHeader h{};
   std::memcpy(h.signature, "HAIR", 4);
-  h.hair_count = strands;
-  h.point_count = std::uint32_t(points);
-  h.arrays = kPoints;  // the header's default segment count gives every strand its points
-  h.default_segments = points_per_strand - 1;
+  h.hair_count = std::uint32_t(s.strands);
+  h.point_count = std::uint32_t(s.points);
+  h.arrays = kPoints | (uniform ? 0u : kSegments) | (s.width ? kThickness : 0u);
+  h.default_segments = uniform ? first_count - 1 : 0;
   h.default_thickness = 1.f;
   h.default_color[0] = h.default_color[1] = h.default_color[2] = 1.f;
   std::strncpy(h.info, "nf_gpu strands", sizeof h.info - 1);
   write_file_atomic(path, [&](std::ostream& out) {
     out.write(reinterpret_cast<const char*>(&h), sizeof h);
-    std::uint64_t written = 0;
-    produce([&](std::span<const float> xyz) {
-      for (float v : xyz)
-        if (!std::isfinite(v))
-          throw InputError(path.string() + ": strand point " + std::to_string((written + std::uint64_t(&v - xyz.data())) / 3) + " is not finite");
-      if (written + xyz.size() > points * 3) throw InternalError(path.string() + ": more points than the header announced");
+    if (!uniform)
+      for (std::uint64_t i = 0; i < s.strands; ++i) {
+        const std::uint16_t segments = std::uint16_t(s.points_in(i) - 1);
+        out.write(reinterpret_cast<const char*>(&segments), 2);
+      }
+    std::uint64_t floats = 0;  // counted in floats: write_uniform_hair's chunks need not hold whole points
+    s.each_chunk([&](std::span<const float> xyz) {
+      require_finite_points(path, xyz, floats);
+      if (floats + xyz.size() > 3 * s.points) throw InternalError(path.string() + ": more points than the header announced");
       out.write(reinterpret_cast<const char*>(xyz.data()), std::streamsize(xyz.size() * 4));
-      written += xyz.size();
+      floats += xyz.size();
     });
-    if (written != points * 3)
-      throw InternalError(path.string() + ": " + std::to_string(written / 3) + " points written, the header announced " + std::to_string(points));
+    if (floats != 3 * s.points)
+      throw InternalError(path.string() + ": " + std::to_string(floats / 3) + " points written, the header announced " + std::to_string(s.points));
+    if (s.width)
+      for (std::uint64_t i = 0; i < s.strands; ++i)
+        for (std::uint32_t k = 0, n = s.points_in(i); k < n; ++k) {
+          const float w = s.width(i, k);
+          out.write(reinterpret_cast<const char*>(&w), 4);
+        }
   });
+}
+
+StrandStream stream_hair_file(const std::filesystem::path& path, std::uint64_t chunk_points) {
+  const std::string where = path.string();
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(where + ": cannot open");
+  HairHeader h;
+  if (!in.read(reinterpret_cast<char*>(&h), sizeof h)) throw InputError(where + ": shorter than the 128-byte .hair header");
+  if (std::memcmp(h.signature, "HAIR", 4) != 0) throw InputError(where + ": not a .hair file (signature 'HAIR' missing)");
+  if (!(h.arrays & kPoints)) throw InputError(where + ": header says the file has no points array");
+  const std::uint64_t size = std::filesystem::file_size(path);
+  const std::uint64_t segments_bytes = (h.arrays & kSegments) ? 2ull * h.hair_count : 0;
+  if (sizeof h + segments_bytes + 12ull * h.point_count > size)
+    throw InputError(where + ": header counts (" + std::to_string(h.hair_count) + " strands, " + std::to_string(h.point_count) +
+                     " points) need more bytes than the file holds (truncated, or a count is wrong)");
+  if (h.hair_count > h.point_count) throw InputError(where + ": hair count " + std::to_string(h.hair_count) + " exceeds the point count " + std::to_string(h.point_count));
+  auto counts = std::make_shared<std::vector<std::uint16_t>>();
+  if (h.arrays & kSegments) {
+    counts->resize(h.hair_count);
+    in.read(reinterpret_cast<char*>(counts->data()), std::streamsize(segments_bytes));
+  } else if (h.default_segments + 1ull > 65536) {
+    throw InputError(where + ": default segment count " + std::to_string(h.default_segments) + " is invalid");
+  }
+  std::uint64_t total = 0;
+  for (std::uint64_t i = 0; i < h.hair_count; ++i) total += (counts->empty() ? h.default_segments : (*counts)[i]) + 1ull;
+  if (total != h.point_count)
+    throw InputError(where + ": strands hold " + std::to_string(total) + " points but the header says " + std::to_string(h.point_count));
+  StrandStream s;
+  s.strands = h.hair_count;
+  s.points = h.point_count;
+  const std::uint32_t uniform = h.default_segments + 1;
+  s.points_in = [counts, uniform](std::uint64_t i) { return counts->empty() ? uniform : std::uint32_t((*counts)[i]) + 1; };
+  const std::uint64_t offset = sizeof h + segments_bytes, points = h.point_count;
+  chunk_points = std::max<std::uint64_t>(1, chunk_points);
+  s.each_chunk = [path, where, offset, points, chunk_points](const PointSink& sink) {
+    std::ifstream file(path, std::ios::binary);
+    if (!file) throw InputError(where + ": cannot open");
+    file.seekg(std::streamoff(offset));
+    std::vector<float> buffer;
+    for (std::uint64_t done = 0; done < points;) {
+      const std::uint64_t n = std::min(chunk_points, points - done);
+      buffer.resize(3 * n);
+      if (!file.read(reinterpret_cast<char*>(buffer.data()), std::streamsize(12 * n)))
+        throw InputError(where + ": ended while reading point " + std::to_string(done) + " (the file changed while being read?)");
+      sink(std::span<const float>(buffer));
+      done += n;
+    }
+  };
+  return s;
 }
 
 StrandSet read_hair(const std::filesystem::path& path) {

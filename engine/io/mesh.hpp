@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "engine/geometry/mesh.hpp"
+#include "engine/io/skeleton.hpp"
 
 namespace nf::io {
 
@@ -40,8 +41,14 @@ void write_mesh_obj(const std::filesystem::path& path, const Mesh& mesh);
 // lie within +-2^24; indices UNSIGNED_INT; a mesh without faces is written as POINTS, an empty mesh
 // without a scene). Writing
 // .gltf through write_mesh is refused: use .glb.
+// With a skeleton, the vertices also get JOINTS_0 (UNSIGNED_SHORT) and WEIGHTS_0, the joints become
+// a node hierarchy (translations only; the bind pose is the mesh as given) and a skin binds them
+// with inverse bind matrices, so Blender and Unreal import an armature that poses the mesh.
+// read_skeleton_gltf reads such a file's first skin back (joint names, parents, bind positions,
+// the first primitive's influences); InputError when the file has no skin or it is malformed.
 Mesh read_mesh_gltf(const std::filesystem::path& path);
-void write_mesh_glb(const std::filesystem::path& path, const Mesh& mesh);
+void write_mesh_glb(const std::filesystem::path& path, const Mesh& mesh, const Skeleton* skeleton = nullptr);
+Skeleton read_skeleton_gltf(const std::filesystem::path& path);
 
 // By extension (.ply, .obj, .glb, .gltf).
 Mesh read_mesh(const std::filesystem::path& path);

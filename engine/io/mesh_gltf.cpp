@@ -335,20 +335,71 @@ class MeshBuilder {
 
 }  // namespace
 
+Skeleton read_skeleton_gltf(const std::filesystem::path& path) {
+  const std::string where = path.string();
+  const tinygltf::Model model = load_gltf_model(path);
+  if (model.skins.empty()) throw InputError(where + ": has no skin (skins[] is empty)");
+  const tinygltf::Skin& skin = model.skins[0];
+  Skeleton s;
+  std::vector<int> joint_of_node(model.nodes.size(), -1);
+  for (std::size_t j = 0; j < skin.joints.size(); ++j) {
+    const int node = skin.joints[j];
+    if (node < 0 || std::size_t(node) >= model.nodes.size()) throw InputError(where + ": skins[0].joints[" + std::to_string(j) + "] is not a node");
+    joint_of_node[std::size_t(node)] = int(j);
+  }
+  s.parents.assign(skin.joints.size(), -1);
+  std::vector<glm::vec3> local(skin.joints.size(), glm::vec3(0));
+  for (std::size_t n = 0; n < model.nodes.size(); ++n)
+    for (int child : model.nodes[n].children)
+      if (child >= 0 && std::size_t(child) < model.nodes.size() && joint_of_node[std::size_t(child)] >= 0)
+        s.parents[std::size_t(joint_of_node[std::size_t(child)])] = joint_of_node[n];
+  for (std::size_t j = 0; j < skin.joints.size(); ++j) {
+    const tinygltf::Node& node = model.nodes[std::size_t(skin.joints[j])];
+    s.joint_names.push_back(node.name);
+    if (node.translation.size() == 3) local[j] = glm::vec3(node.translation[0], node.translation[1], node.translation[2]);
+    if (s.parents[j] >= std::int32_t(j)) throw InputError(where + ": joint " + std::to_string(j) + " comes before its parent");
+    s.joint_positions.push_back(local[j] + (s.parents[j] < 0 ? glm::vec3(0) : s.joint_positions[std::size_t(s.parents[j])]));
+  }
+  for (const tinygltf::Mesh& mesh : model.meshes)
+    for (const tinygltf::Primitive& p : mesh.primitives) {
+      const auto joints = p.attributes.find("JOINTS_0"), weights = p.attributes.find("WEIGHTS_0");
+      if (joints == p.attributes.end() || weights == p.attributes.end()) continue;
+      const auto read = [&](int index, int component, auto& out, const char* name) {
+        const tinygltf::Accessor& a = model.accessors[std::size_t(index)];
+        if (a.componentType != component || a.type != TINYGLTF_TYPE_VEC4 || a.bufferView < 0)
+          throw InputError(where + ": " + name + " is not the VEC4 layout nf_gpu writes");
+        const tinygltf::BufferView& v = model.bufferViews[std::size_t(a.bufferView)];
+        const std::size_t bytes = 4 * a.count * sizeof(out[0]);
+        const std::vector<unsigned char>& data = model.buffers[std::size_t(v.buffer)].data;
+        if (v.byteOffset + a.byteOffset + bytes > data.size() || (v.byteStride && v.byteStride != 4 * sizeof(out[0])))
+          throw InputError(where + ": " + name + " lies outside its buffer");
+        out.resize(4 * a.count);
+        std::memcpy(out.data(), data.data() + v.byteOffset + a.byteOffset, bytes);
+      };
+      read(joints->second, kUShort, s.skin_joints, "JOINTS_0");
+      read(weights->second, kFloat, s.skin_weights, "WEIGHTS_0");
+      s.validate(where, s.skin_weights.size() / 4);
+      return s;
+    }
+  throw InputError(where + ": no primitive has JOINTS_0 and WEIGHTS_0");
+}
+
 Mesh read_mesh_gltf(const std::filesystem::path& path) {
   const tinygltf::Model model = load_gltf_model(path);
   return MeshBuilder(model, path.string()).build();
 }
 
-void write_mesh_glb(const std::filesystem::path& path, const Mesh& m) {
+void write_mesh_glb(const std::filesystem::path& path, const Mesh& m, const Skeleton* skeleton) {
   const std::string where = path.string();
   m.validate(where);
+  if (skeleton) skeleton->validate(where, m.vertex_count());
   for (std::size_t v = 0; v < m.regions.size(); ++v)
     if (m.regions[v] > kFloatRegionLimit || m.regions[v] < -kFloatRegionLimit)
       throw InputError(where + ": region " + std::to_string(m.regions[v]) + " of vertex " + std::to_string(v) +
                        " is beyond +-2^24, which the FLOAT _REGION attribute cannot hold exactly");
   const std::uint64_t n = m.vertex_count(), corners = m.triangles.size();
-  const std::uint64_t bin = 4 * (3 * n + m.normals.size() + m.regions.size() + corners);
+  const std::uint64_t bin = 4 * (3 * n + m.normals.size() + m.regions.size() + corners) +
+                            (skeleton ? 24 * n + 64 * skeleton->joint_count() : 0);
   if (bin > 0xFFFFFFFFull - 65536)  // the JSON of one mesh needs far less than the 64 KiB kept for it
     throw InputError(where + ": the mesh needs " + std::to_string(bin) + " bytes, beyond the 4 GiB a GLB can hold");
 
@@ -359,12 +410,13 @@ void write_mesh_glb(const std::filesystem::path& path, const Mesh& m) {
     tinygltf::Buffer& buffer = model.buffers.emplace_back();
     buffer.data.reserve(bin);
     auto add = [&](const void* data, std::uint64_t count, int component, int type, int target) {
-      const std::uint64_t bytes = count * std::uint64_t(tinygltf::GetNumComponentsInType(std::uint32_t(type))) * 4;
+      const std::uint64_t bytes = count * std::uint64_t(tinygltf::GetNumComponentsInType(std::uint32_t(type))) *
+                                  std::uint64_t(tinygltf::GetComponentSizeInBytes(std::uint32_t(component)));
       tinygltf::BufferView& view = model.bufferViews.emplace_back();
       view.buffer = 0;
       view.byteOffset = buffer.data.size();
       view.byteLength = bytes;
-      view.target = target;
+      if (target) view.target = target;
       const auto* p = static_cast<const unsigned char*>(data);
       buffer.data.insert(buffer.data.end(), p, p + bytes);
       tinygltf::Accessor& a = model.accessors.emplace_back();
@@ -393,10 +445,36 @@ void write_mesh_glb(const std::filesystem::path& path, const Mesh& m) {
     primitive.mode = corners ? TINYGLTF_MODE_TRIANGLES : TINYGLTF_MODE_POINTS;
     if (corners)
       primitive.indices = add(m.triangles.data(), corners, kUInt, TINYGLTF_TYPE_SCALAR, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
+    if (skeleton) {
+      primitive.attributes["JOINTS_0"] = add(skeleton->skin_joints.data(), n, kUShort, TINYGLTF_TYPE_VEC4, TINYGLTF_TARGET_ARRAY_BUFFER);
+      primitive.attributes["WEIGHTS_0"] = add(skeleton->skin_weights.data(), n, kFloat, TINYGLTF_TYPE_VEC4, TINYGLTF_TARGET_ARRAY_BUFFER);
+    }
     model.meshes.emplace_back().primitives.push_back(std::move(primitive));
     model.nodes.emplace_back().mesh = 0;
     model.scenes.emplace_back().nodes = {0};
     model.defaultScene = 0;
+    if (skeleton) {  // joint nodes 1..J, translations relative to the parent; the skin
+      const std::size_t J = skeleton->joint_count();
+      std::vector<float> inverse_bind(16 * J, 0.f);
+      tinygltf::Skin& skin = model.skins.emplace_back();
+      skin.name = "body";
+      for (std::size_t j = 0; j < J; ++j) {
+        tinygltf::Node& node = model.nodes.emplace_back();
+        node.name = skeleton->joint_names[j];
+        const int parent = skeleton->parents[j];
+        const glm::vec3 at = skeleton->joint_positions[j] - (parent < 0 ? glm::vec3(0) : skeleton->joint_positions[std::size_t(parent)]);
+        node.translation = {at.x, at.y, at.z};
+        if (parent < 0) model.scenes[0].nodes.push_back(int(1 + j));
+        else model.nodes[std::size_t(1 + parent)].children.push_back(int(1 + j));
+        skin.joints.push_back(int(1 + j));
+        float* ib = &inverse_bind[16 * j];  // column-major translate(-position)
+        ib[0] = ib[5] = ib[10] = ib[15] = 1.f;
+        ib[12] = -skeleton->joint_positions[j].x, ib[13] = -skeleton->joint_positions[j].y, ib[14] = -skeleton->joint_positions[j].z;
+      }
+      skin.inverseBindMatrices = add(inverse_bind.data(), J, kFloat, TINYGLTF_TYPE_MAT4, 0);
+      model.nodes[0].skin = 0;
+      model.nodes[0].name = "body";
+    }
   }
   write_file_atomic(path, [&](std::ostream& out) {
     tinygltf::TinyGLTF gltf;

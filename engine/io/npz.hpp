@@ -17,7 +17,7 @@ struct NpyArray {
 NpyArray read_npz_array(const std::filesystem::path& file, const std::string& name);
 std::vector<std::string> npz_array_names(const std::filesystem::path& file);
 
-// Writes arrays (C order, uncompressed) to a new .npz, atomically. dtype: <f8, <f4, <i8, <i4 or <u4.
+// Writes arrays (C order; libzip deflates each member) to a new .npz, atomically. dtype: <f8, <f4, <i8, <i4 or <u4.
 struct NpyWrite {
   std::string name;
   std::vector<std::uint64_t> shape;

@@ -14,9 +14,14 @@
 #include <span>
 #include <string>
 
+#include <glm/glm.hpp>
+
+#include "engine/geometry/mesh.hpp"
 #include "engine/io/strands.hpp"
 
 namespace nf::io {
+
+struct StrandStream;
 
 void write_hair(const std::filesystem::path& path, const StrandSet& strands);
 StrandSet read_hair(const std::filesystem::path& path);
@@ -35,6 +40,24 @@ StrandSet read_strands_obj(const std::filesystem::path& path);
 
 // default_width is used where the set has no thickness (scene units).
 void write_strands_usda(const std::filesystem::path& path, const StrandSet& strands, float default_width = 0.0025f);
+
+// Streamed writers (strand_stream.hpp): the points are asked for once and never held whole.
+// .hair gets a thickness array from the widths; .ply a thickness property; .usda widths per vertex.
+void write_hair(const std::filesystem::path& path, const StrandStream& strands);
+void write_strands_ply(const std::filesystem::path& path, const StrandStream& strands);
+void write_strands_obj(const std::filesystem::path& path, const StrandStream& strands);
+// What a .usda groom holds beside the curves: the unit, the body as a Mesh prim "body" (normals and
+// `region` per vertex when present) and, per curve, the body face and barycentric coordinates of its
+// root (uniform primvars rootFace, rootBarycentric) so the fur can follow the skin.
+struct UsdaScene {
+  double meters_per_unit = 0;  // stated in the layer's metadata when > 0
+  const geometry::Mesh* body = nullptr;
+  std::function<std::uint32_t(std::uint64_t)> root_face;
+  std::function<glm::vec3(std::uint64_t)> root_barycentric;
+};
+// Under a root Xform "animal" (the default prim, Y up): BasisCurves "fur" (linear, nonperiodic,
+// extent, widths per vertex when the stream has them, `region` uniform) and the UsdaScene's parts.
+void write_strands_usda(const std::filesystem::path& path, const StrandStream& strands, const UsdaScene& scene = {});
 StrandSet read_strands_usda(const std::filesystem::path& path);
 
 // By extension (.hair, .ply, .obj, .usda); throws InputError for others.

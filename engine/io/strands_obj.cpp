@@ -7,21 +7,37 @@
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
 #include "engine/io/strand_files.hpp"
+#include "engine/io/strand_stream.hpp"
 #include "engine/io/text_io.hpp"
 
 namespace nf::io {
 void write_strands_obj(const std::filesystem::path& path, const StrandSet& s) {
   s.validate(path.string());
+  write_strands_obj(path, StrandStream::of(s));
+}
+
+void write_strands_obj(const std::filesystem::path& path, const StrandStream& s) {
   write_file_atomic(path, [&](std::ostream& out) {
-    out << "# nf_gpu strands: " << s.strand_count() << " polylines, " << s.point_count() << " points\n";
-    for (std::uint64_t p = 0; p < s.point_count(); ++p) {
-      out << "v ";
-      put_xyz(out, &s.points[3 * p]);
-      out << '\n';
-    }
-    for (std::uint32_t i = 0; i < s.strand_count(); ++i) {
+    out << "# nf_gpu strands: " << s.strands << " polylines, " << s.points << " points\n";
+    std::uint64_t written = 0;
+    s.each_chunk([&](std::span<const float> xyz) {
+      require_finite_points(path, xyz, 3 * written);
+      for (std::size_t p = 0; p < xyz.size() / 3; ++p) {
+        out << "v ";
+        put_xyz(out, &xyz[3 * p]);
+        out << '\n';
+      }
+      written += xyz.size() / 3;
+    });
+    if (written != s.points) throw InternalError(path.string() + ": " + std::to_string(written) + " points streamed, " + std::to_string(s.points) + " announced");
+    std::uint64_t next = 1;  // OBJ counts from 1
+    for (std::uint64_t i = 0; i < s.strands; ++i) {
+      const std::uint32_t n = s.points_in(i);
       out << 'l';
-      for (std::uint32_t p = s.offsets[i]; p < s.offsets[i + 1]; ++p) out << ' ' << (p + 1);
+      for (std::uint32_t k = 0; k < n; ++k) {
+        out << ' ';
+        put_integer(out, next++);
+      }
       out << '\n';
     }
   });

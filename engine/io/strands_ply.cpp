@@ -2,47 +2,75 @@
 // that Blender and most tools import, and a `strand` element (first, count, region) that keeps the
 // strands exact for nf_gpu and anyone who reads it. The header is parsed by ply_header.cpp, shared
 // with the mesh reader.
+#include <algorithm>
 #include <sstream>
 
 #include "engine/core/atomic_file.hpp"
 #include "engine/io/binary_io.hpp"
 #include "engine/io/ply_header.hpp"
 #include "engine/io/strand_files.hpp"
+#include "engine/io/strand_stream.hpp"
 
 namespace nf::io {
 
 void write_strands_ply(const std::filesystem::path& path, const StrandSet& s) {
   s.validate(path.string());
-  std::uint64_t edges = 0;
-  for (std::uint32_t i = 0; i < s.strand_count(); ++i) edges += s.points_in(i) ? s.points_in(i) - 1 : 0;
-  const bool thick = !s.thickness.empty();
+  write_strands_ply(path, StrandStream::of(s));
+}
+
+void write_strands_ply(const std::filesystem::path& path, const StrandStream& s) {
+  if (s.points > 0x7fffffffull)
+    throw InputError(path.string() + ": " + std::to_string(s.points) + " points exceed the 32-bit signed indices of the PLY edge element; split the groom");
+  const std::uint64_t edges = s.points - [&] {
+    std::uint64_t nonempty = 0;
+    for (std::uint64_t i = 0; i < s.strands; ++i) nonempty += s.points_in(i) ? 1 : 0;
+    return nonempty;
+  }();
+  const bool thick = bool(s.width);
   std::ostringstream header;
   header << "ply\nformat binary_little_endian 1.0\ncomment nf_gpu strands: polylines as vertex chains\n"
-         << "element vertex " << s.point_count() << "\nproperty float x\nproperty float y\nproperty float z\n"
+         << "element vertex " << s.points << "\nproperty float x\nproperty float y\nproperty float z\n"
          << (thick ? "property float thickness\n" : "") << "element edge " << edges
          << "\nproperty int vertex1\nproperty int vertex2\n"
-         << "element strand " << s.strand_count() << "\nproperty int first\nproperty int count\nproperty ushort region\n"
+         << "element strand " << s.strands << "\nproperty int first\nproperty int count\nproperty ushort region\n"
          << "end_header\n";
   write_file_atomic(path, [&](std::ostream& out) {
     out << header.str();
-    if (!thick) {
-      write_array(out, s.points);
-    } else {
-      for (std::uint64_t p = 0; p < s.point_count(); ++p) {
-        out.write(reinterpret_cast<const char*>(&s.points[3 * p]), 12);
-        out.write(reinterpret_cast<const char*>(&s.thickness[p]), 4);
+    std::uint64_t written = 0;
+    StrandCursor at(s);
+    std::vector<float> interleaved;
+    s.each_chunk([&](std::span<const float> xyz) {
+      require_finite_points(path, xyz, 3 * written);
+      const std::size_t n = xyz.size() / 3;
+      if (!thick) {
+        out.write(reinterpret_cast<const char*>(xyz.data()), std::streamsize(xyz.size() * 4));
+      } else {
+        interleaved.resize(4 * n);
+        for (std::size_t p = 0; p < n; ++p, at.next()) {
+          for (int a = 0; a < 3; ++a) interleaved[4 * p + std::size_t(a)] = xyz[3 * p + std::size_t(a)];
+          interleaved[4 * p + 3] = s.width(at.strand(), at.k());
+        }
+        out.write(reinterpret_cast<const char*>(interleaved.data()), std::streamsize(interleaved.size() * 4));
       }
-    }
-    for (std::uint32_t i = 0; i < s.strand_count(); ++i)
-      for (std::uint32_t p = s.offsets[i]; p + 1 < s.offsets[i + 1]; ++p) {
+      written += n;
+    });
+    if (written != s.points) throw InternalError(path.string() + ": " + std::to_string(written) + " points streamed, " + std::to_string(s.points) + " announced");
+    std::int64_t first = 0;
+    for (std::uint64_t i = 0; i < s.strands; ++i) {
+      const std::int64_t n = s.points_in(i);
+      for (std::int64_t p = first; p + 1 < first + n; ++p) {
         const std::int32_t e[2] = {std::int32_t(p), std::int32_t(p + 1)};
         out.write(reinterpret_cast<const char*>(e), 8);
       }
-    for (std::uint32_t i = 0; i < s.strand_count(); ++i) {
-      const std::int32_t fc[2] = {std::int32_t(s.offsets[i]), std::int32_t(s.points_in(i))};
-      const std::uint16_t region = s.regions.empty() ? 0 : s.regions[i];
+      first += n;
+    }
+    first = 0;
+    for (std::uint64_t i = 0; i < s.strands; ++i) {
+      const std::int32_t fc[2] = {std::int32_t(first), std::int32_t(s.points_in(i))};
+      const std::uint16_t region = s.region ? std::uint16_t(std::clamp(s.region(i), 0, 65535)) : 0;
       out.write(reinterpret_cast<const char*>(fc), 8);
       out.write(reinterpret_cast<const char*>(&region), 2);
+      first += fc[1];
     }
   });
 }
