@@ -1,6 +1,7 @@
 // nf_gpu: the command line. Parsing and printing only; the work lives in engine/.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -18,6 +19,9 @@
 #include "engine/gradcheck/catalog.hpp"
 #include "engine/metrics/metrics_report.hpp"
 #include "engine/knowledge/knowledge.hpp"
+#include "engine/pipeline/export_stage.hpp"
+#include "engine/pipeline/groom_edit.hpp"
+#include "engine/pipeline/groom_pose.hpp"
 #include "engine/pipeline/knowledge_stage.hpp"
 #include "engine/synth/preview.hpp"
 #include "engine/orient/scene_orientation.hpp"
@@ -191,6 +195,17 @@ std::optional<std::vector<nf::pipeline::StageOutcome>> run_stages(nf::gpu::Conte
   }
 }
 
+// Where the export files are and how to open them (what reconstruct, edit and pose print last).
+void print_export_guide(const std::filesystem::path& dir) {
+  std::printf("groom and body in %s (metres, +y up, the animal facing +z):\n", dir.string().c_str());
+  std::printf("  fur.usda   curves + body in one USD file: Houdini (File > Import > USD), Unreal (USD Stage), Omniverse\n");
+  std::printf("  body.glb   rigged body: Blender (File > Import > glTF 2.0), Unreal (Import), Houdini (glTF ROP/SOP)\n");
+  std::printf("  fur.ply, fur.obj, fur.hair   the strands as polylines for any tool; fur.hair for Cem Yuksel's viewers\n");
+  std::printf("  Blender hair: blender -b -P tools/blender/nf_gpu_import.py -- %s (or install tools/blender as an add-on)\n",
+              dir.string().c_str());
+  std::printf("  previews: %s/turntable.png\n", dir.string().c_str());
+}
+
 int run_reconstruct(const nf::pipeline::ReconstructOptions& options, bool as_json, bool profile,
                     const std::string& command_line) {
   nf::gpu::Context context;
@@ -209,6 +224,8 @@ int run_reconstruct(const nf::pipeline::ReconstructOptions& options, bool as_jso
     std::printf("%-10s %s%s\n", o.name.c_str(), o.ran ? "ran in " : "unchanged, skipped",
                 o.ran ? (std::to_string(o.seconds) + " s").c_str() : "");
   std::printf("outputs in %s\n", options.work.string().c_str());
+  if (std::any_of(outcomes.begin(), outcomes.end(), [](const auto& o) { return o.name == "export"; }))
+    print_export_guide(nf::pipeline::export_outputs(options.work).dir);
   return 0;
 }
 
@@ -280,6 +297,31 @@ int run_train_prior(const std::string& out, nf::fur::PriorTrainingOptions option
                 100 * set["encode_decode"]["p95"].get<double>(), 100 * set["fitted"]["mean"].get<double>(),
                 100 * set["fitted"]["p95"].get<double>());
   std::printf("(point error as a share of the strand's length)\n");
+  return 0;
+}
+
+int run_edit(const nf::pipeline::EditOptions& options, bool as_json) {
+  nf::gpu::Context context;
+  const json record = nf::pipeline::run_edit(context, options);
+  if (as_json) {
+    std::cout << record.dump(2) << "\n";
+    return 0;
+  }
+  std::printf("edit: %s strands (was %s), inferred in %.1f s, exported in %.1f s\n", record["strands"]["after"].dump().c_str(),
+              record["strands"]["before"].dump().c_str(), record["seconds"]["inference"].get<double>(), record["seconds"]["export"].get<double>());
+  print_export_guide(options.out);
+  return 0;
+}
+
+int run_pose(const nf::pipeline::PoseOptions& options, bool as_json) {
+  const json record = nf::pipeline::run_pose(options);
+  if (as_json) {
+    std::cout << record.dump(2) << "\n";
+    return 0;
+  }
+  std::printf("pose: %zu joints rotated, %s strands moved with the skin in %.1f s\n", record["joints"].size(),
+              record["export"]["strands"].dump().c_str(), record["seconds"].get<double>());
+  print_export_guide(options.out);
   return 0;
 }
 
@@ -433,6 +475,33 @@ int main(int argc, char** argv) {
   train_prior->add_option("--fit-iterations", prior_fit_iterations, "latent-fitting iterations in the evaluation (default 100)")->check(CLI::Range(0, 100000));
   train_prior->add_flag("--json", prior_json, "print the record as JSON");
 
+  nf::pipeline::EditOptions edit_options;
+  std::string edit_work, edit_out;
+  std::uint32_t edit_strands = 0;
+  bool edit_json = false;
+  auto* edit = app.add_subcommand("edit", "re-infer and re-export the groom with per-region changes, without retraining");
+  edit->add_option("--work", edit_work, "WORK folder of a finished reconstruct")->required();
+  edit->add_option("--out", edit_out, "output folder (not inside WORK; created if needed)")->required();
+  edit->add_option("--set", edit_options.sets, "REGION.length_cm=X, REGION.thickness_cm=X or REGION.density=X (repeatable)");
+  edit->add_option("--shave", edit_options.shave, "a region to shave (repeatable)");
+  edit->add_option("--strands", edit_strands, "re-sample this many roots over the fur first")->check(CLI::Range(1u, 40000000u));
+  edit->add_option("--seed", edit_options.seed, "seed of new roots (default 1)");
+  edit->add_option("--quality", edit_options.quality, "previews' preset (default draft)")->check(CLI::IsMember(nf::pipeline::quality_names()));
+  edit->add_option("--formats", edit_options.formats, "groom files, comma-separated (default usda,hair,ply,obj)");
+  edit->add_flag("--json", edit_json, "print the record as JSON");
+
+  nf::pipeline::PoseOptions pose_options;
+  std::string pose_work, pose_out, pose_groom;
+  bool pose_json = false;
+  auto* pose = app.add_subcommand("pose", "pose body and fur with the fitted skeleton (linear blend skinning; strands follow their root)");
+  pose->add_option("--work", pose_work, "WORK folder of a finished reconstruct")->required();
+  pose->add_option("--out", pose_out, "output folder (not inside WORK; created if needed)")->required();
+  pose->add_option("--set", pose_options.sets, "joint.NAME=rx,ry,rz: a rotation vector in degrees, export frame (repeatable)");
+  pose->add_option("--groom", pose_groom, "pose an edit's folder instead of WORK's groom");
+  pose->add_option("--quality", pose_options.quality, "previews' preset (default draft)")->check(CLI::IsMember(nf::pipeline::quality_names()));
+  pose->add_option("--formats", pose_options.formats, "groom files, comma-separated (default usda,hair,ply,obj)");
+  pose->add_flag("--json", pose_json, "print the record as JSON");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -475,6 +544,15 @@ int main(int argc, char** argv) {
     if (*orient) {
       orient_options.scene = orient_scene, orient_options.out = orient_out;
       return run_orient(orient_options);
+    }
+    if (*edit) {
+      edit_options.work = edit_work, edit_options.out = edit_out;
+      if (edit_strands) edit_options.strands = edit_strands;
+      return run_edit(edit_options, edit_json);
+    }
+    if (*pose) {
+      pose_options.work = pose_work, pose_options.out = pose_out, pose_options.groom = pose_groom;
+      return run_pose(pose_options, pose_json);
     }
     if (*render) {
       render_options.strands = render_strands, render_options.mesh = render_mesh;

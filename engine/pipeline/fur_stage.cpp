@@ -12,16 +12,17 @@
 #include "engine/core/stopwatch.hpp"
 #include "engine/defur/vertex_fur.hpp"
 #include "engine/fur/baseline_groom.hpp"
+#include "engine/fur/fur_model_file.hpp"
 #include "engine/fur/ground_truth_inputs.hpp"
 #include "engine/gpu/context.hpp"
 #include "engine/io/ground_truth.hpp"
+#include "engine/io/json_fields.hpp"
 #include "engine/io/mesh.hpp"
 #include "engine/io/npz.hpp"
 #include "engine/io/strand_files.hpp"
 #include "engine/io/view_names.hpp"
 #include "engine/knowledge/knowledge.hpp"
 #include "engine/metrics/groom_scores.hpp"
-#include "engine/nn/weights_io.hpp"
 #include "engine/pipeline/body_stage.hpp"
 #include "engine/pipeline/checkpoint.hpp"
 #include "engine/pipeline/defur_stage.hpp"
@@ -33,7 +34,7 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 1;
+constexpr int kStageVersion = 2;  // 2: fur/roots.npz when the groom has roots of its own
 
 FurSettings settings_of(const StageContext& c) { return fur_settings().resolve(c.quality, c.settings.value("fur", json::object())); }
 
@@ -54,6 +55,8 @@ void split_views(const io::Scene& scene, int hold_out_every, std::vector<std::ui
   if (train.empty() && !held_out.empty()) train.swap(held_out);  // a single view trains
 }
 
+}  // namespace
+
 fur::FaceFrames read_face_frames(const fs::path& file, std::size_t faces) {
   fur::FaceFrames f;
   for (auto [name, out] : {std::pair{"tangent", &f.tangent}, {"normal", &f.normal}}) {
@@ -65,6 +68,17 @@ fur::FaceFrames read_face_frames(const fs::path& file, std::size_t faces) {
   }
   return f;
 }
+
+fs::path groom_roots_file(const fs::path& work) {
+  const FurOutputs o = fur_outputs(work);
+  const json m = io::read_json_file(o.metrics());
+  const io::JsonField field = io::JsonField(m, o.metrics().string()).at("roots_file");
+  if (!field.value().is_string() || (field.value() != "frames/roots.npz" && field.value() != "fur/roots.npz"))
+    field.fail("expected \"frames/roots.npz\" or \"fur/roots.npz\"; rerun the fur stage");
+  return work / field.value().get<std::string>();
+}
+
+namespace {
 
 // The groom over the photo: orientation as hue (doubled angle, as `nf_gpu orient` draws it) where
 // the strands cover the pixel, the photo elsewhere; beside it the Gabor map of the photo.
@@ -159,7 +173,7 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
     log::warn("fur: every region of the knowledge is bald, so there is no fur to grow; writing an empty groom");
     io::write_uniform_hair(out.strands(), 0, fur::kStrandPoints, [](const auto&) {});
     io::write_npz(out.regions(), {{"region", {0}, "<i4", {}}});
-    json summary{{"strands", 0}, {"note", "every region is bald: no strands"}};
+    json summary{{"strands", 0}, {"roots_file", "frames/roots.npz"}, {"note", "every region is bald: no strands"}};
     write_file_atomic(out.metrics(), summary.dump(2) + "\n");
     return summary;
   }
@@ -244,21 +258,7 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
   for (const fur::FurStepReport& r : trainer->history()) curve += step_json(r).dump() + "\n";
   write_file_atomic(out.training(), curve);
 
-  nn::WeightsFile model;
-  const fur::RootBox& box = trainer->field().box();
-  model.config = {{"kind", "fur field"},
-                  {"field", s.field.to_json()},
-                  {"latent", prior->config().latent},
-                  {"box", {{"lo", {box.lo.x, box.lo.y, box.lo.z}}, {"hi", {box.hi.x, box.hi.y, box.hi.z}}}},
-                  {"steps", trainer->step()},
-                  {"train_decoder", s.training.train_decoder}};
-  std::vector<float> params = trainer->field().parameters();
-  model.tensors.push_back({"field", {params.size()}, std::move(params)});
-  if (s.training.train_decoder) {
-    std::vector<float> dec = prior->decoder().parameters().download();
-    model.tensors.push_back({"decoder", {dec.size()}, std::move(dec)});
-  }
-  nn::save_weights(out.model(), model);
+  fur::save_fur_model(out.model(), trainer->field(), *prior, trainer->step(), s.training.train_decoder);
 
   // Held-out views.
   t.restart();
@@ -284,6 +284,7 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
   if (s.strands != data.roots.size()) {
     infer_roots = fur::sample_roots(bald, read_face_frames(f.frames(), bald.triangle_count()), vertex_fur, s.strands, s.training.seed + 11);
     roots = &infer_roots;
+    fur::write_roots(out.roots(), infer_roots);  // what edit and export need to know where each strand grows
   }
   const std::uint32_t n = std::uint32_t(roots->size());
   std::vector<std::uint32_t> ids(n);
@@ -359,6 +360,7 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
 
   const fur::FurStepReport last = trainer->last_report();
   json summary{{"strands", n},
+               {"roots_file", roots == &data.roots ? "frames/roots.npz" : "fur/roots.npz"},
                {"steps", trainer->step()},
                {"training_strands_per_step", std::min<std::size_t>(s.training.strands, data.roots.size())},
                {"strand_width_mm", trainer->strand_width(trainer->batch()) * cm * 10.0},

@@ -17,8 +17,14 @@ struct FurOutputs {
   std::filesystem::path training() const { return dir / "training.jsonl"; } // the loss curve: every 10th step
   std::filesystem::path metrics() const { return dir / "metrics.json"; }    // the stage summary
   std::filesystem::path previews() const { return dir / "previews"; }       // the groom over held-out photos
+  std::filesystem::path roots() const { return dir / "roots.npz"; }         // when the groom's roots are not frames/roots.npz
 };
 inline FurOutputs fur_outputs(const std::filesystem::path& work) { return {work / "fur"}; }
+// The roots file of the groom in fur/strands.hair (one root per strand, same order): fur/roots.npz
+// or frames/roots.npz, as fur/metrics.json records. InputError when the record is missing.
+std::filesystem::path groom_roots_file(const std::filesystem::path& work);
+// frames.npz's per-face frames of M_bald (`faces` faces); InputError naming the file.
+fur::FaceFrames read_face_frames(const std::filesystem::path& file, std::size_t faces);
 
 struct FurSettings {
   fur::FurTrainingOptions training;

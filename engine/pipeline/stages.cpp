@@ -7,6 +7,7 @@
 #include "engine/core/text.hpp"
 #include "engine/pipeline/body_stage.hpp"
 #include "engine/pipeline/defur_stage.hpp"
+#include "engine/pipeline/export_stage.hpp"
 #include "engine/pipeline/frames_stage.hpp"
 #include "engine/pipeline/fur_stage.hpp"
 #include "engine/pipeline/knowledge_stage.hpp"
@@ -23,6 +24,7 @@ std::vector<std::unique_ptr<Stage>> reconstruction_stages() {
   stages.push_back(std::make_unique<DefurStage>());
   stages.push_back(std::make_unique<FramesStage>());
   stages.push_back(std::make_unique<FurStage>());
+  stages.push_back(std::make_unique<ExportStage>());
   // Next, as it lands: export.
   return stages;
 }

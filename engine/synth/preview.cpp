@@ -22,8 +22,8 @@ namespace nf::synth {
 namespace fs = std::filesystem;
 
 namespace {
-
 float srgb_to_linear(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
+}  // namespace
 
 glm::vec3 linear(glm::vec3 srgb) { return {srgb_to_linear(srgb.r), srgb_to_linear(srgb.g), srgb_to_linear(srgb.b)}; }
 
@@ -32,6 +32,8 @@ glm::vec3 palette_color(std::int64_t region) {
   if (region < 0 || region >= std::int64_t(p.size())) return p[std::size_t(body::Region::body)];
   return p[std::size_t(region)];
 }
+
+namespace {
 
 // 0.5 x the median over cameras of depth(animal centre) / focal length, in scene units.
 float default_radius(const io::Scene& scene, const geometry::Mesh& mesh) {

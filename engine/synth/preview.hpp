@@ -50,6 +50,10 @@ struct PreviewResult {
 
 // sRGB colours, indexed by region id (body::Region).
 const std::array<glm::vec3, body::kRegionCount>& region_palette();
+// A region's palette colour (the `body` colour for an id outside the table), and sRGB -> linear
+// (what the renderer's looks take).
+glm::vec3 palette_color(std::int64_t region);
+glm::vec3 linear(glm::vec3 srgb);
 
 
 // Reads the inputs (InputError naming the file and field when one is missing or malformed),

@@ -5,7 +5,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -381,7 +383,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   INFO(framed.output);
   REQUIRE(framed.code == 0);
   const nf::json five = nf::json::parse(framed.output.substr(framed.output.find('[')));
-  REQUIRE(five.size() == 6);
+  REQUIRE(five.size() == 7);
   CHECK((five[2]["ran"] == false && five[3]["stage"] == "defur" && five[4]["stage"] == "frames"));
   for (const char* f : {"defur/bald.ply", "defur/vertex_fur.npz", "defur/bald_sdf.npz", "defur/refit.ply", "defur/metrics.json",
                         "defur/nonbald_masks/007.png", "defur/previews/000.png", "frames/frames.npz", "frames/roots.npz",
@@ -411,6 +413,102 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   CHECK(fur_summary["held_out"]["silhouette_iou"].get<double>() > 0.0);
   const Result metrics_cmd = run("metrics --pred " + (work / "fur" / "strands.hair").string() + " --strands 200 --json");
   CHECK(metrics_cmd.code == 0);  // scale.json beside the strands declares the unit
+  // The export stage: the groom in four formats and the rigged body, in metres, upright.
+  for (const char* f : {"export/fur.usda", "export/fur.hair", "export/fur.ply", "export/fur.obj", "export/body.glb", "export/roots.npz",
+                        "export/export.json", "export/turntable.png", "export/turntable_000.png"})
+    CHECK_MESSAGE(fs::exists(work / f), f);
+  CHECK(five[6]["summary"]["strands"] == 2500);
+  const nf::io::StrandSet exported = nf::io::read_hair(work / "export" / "fur.hair");
+  CHECK(exported.strand_count() == 2500);
+  CHECK(exported.thickness.size() == exported.point_count());
+  CHECK(nf::io::read_strands_ply(work / "export" / "fur.ply").regions.size() == 2500);
+  CHECK(nf::io::read_strands_obj(work / "export" / "fur.obj").strand_count() == 2500);
+  CHECK(nf::io::read_strands_usda(work / "export" / "fur.usda").points == exported.points);
+  const nf::io::Skeleton skeleton = nf::io::read_skeleton_gltf(work / "export" / "body.glb");
+  const nf::geometry::Mesh body_glb = nf::io::read_mesh_gltf(work / "export" / "body.glb");
+  CHECK(skeleton.joint_count() > 10);
+  CHECK(body_glb.vertex_count() == bald.vertex_count());
+  // Metres: the synth cat (1 unit = 1 m) keeps its size, standing on y = 0.
+  float lowest = 1e9f, highest = -1e9f;
+  for (std::size_t v = 0; v < body_glb.vertex_count(); ++v) lowest = std::min(lowest, body_glb.positions[3 * v + 1]), highest = std::max(highest, body_glb.positions[3 * v + 1]);
+  CHECK(lowest == doctest::Approx(0.0).epsilon(1e-5));
+  CHECK(highest > 0.1f);
+  CHECK(highest < 1.0f);
+  CHECK(framed.output.find("Blender hair: blender -b -P") == std::string::npos);  // --json prints JSON only
+
+  // nf_gpu edit: the tail 1.5 times longer, the rest bit-identical; a shave; a density.
+  const nf::io::StrandSet groom = nf::io::read_hair(work / "fur" / "strands.hair");
+  std::vector<std::int32_t> regions;
+  {
+    nf::json k = nf::json::parse(std::ifstream(work / "knowledge" / "knowledge.json"));
+    const double tail_cm = k["regions"]["tail"]["length_cm"].get<double>();
+    const Result edit = run("edit --work " + work.string() + " --out " + (root / "edit_tail").string() + " --set tail.length_cm=" +
+                            std::to_string(1.5 * tail_cm) + " --json");
+    INFO(edit.output);
+    REQUIRE(edit.code == 0);
+    for (const char* f : {"fur.usda", "fur.hair", "fur.ply", "fur.obj", "body.glb", "roots.npz", "export.json", "edit.json", "scene_strands.hair"})
+      CHECK_MESSAGE(fs::exists(root / "edit_tail" / f), f);
+    const nf::io::StrandSet longer = nf::io::read_hair(root / "edit_tail" / "scene_strands.hair");
+    REQUIRE(longer.strand_count() == groom.strand_count());
+    // Regions of the groom: the stage's regions.npz (i4).
+    const std::string npz = (work / "fur" / "regions.npz").string();
+    const nf::json edit_record = nf::json::parse(std::ifstream(root / "edit_tail" / "edit.json"));
+    CHECK(edit_record["edits"]["regions"]["tail"]["length_cm"].get<double>() == doctest::Approx(1.5 * tail_cm));
+    const nf::io::StrandSet ply = nf::io::read_strands_ply(work / "export" / "fur.ply");  // regions per strand
+    int tails = 0, identical = 0, others = 0, scaled = 0;
+    for (std::uint32_t i = 0; i < groom.strand_count(); ++i) {
+      const auto length = [](const nf::io::StrandSet& s, std::uint32_t strand) {
+        double l = 0;
+        for (std::uint32_t p = s.offsets[strand] + 1; p < s.offsets[strand + 1]; ++p)
+          l += std::sqrt(std::pow(s.points[3 * p] - s.points[3 * p - 3], 2) + std::pow(s.points[3 * p + 1] - s.points[3 * p - 2], 2) +
+                         std::pow(s.points[3 * p + 2] - s.points[3 * p - 1], 2));
+        return l;
+      };
+      const bool same = std::equal(groom.points.begin() + 3 * groom.offsets[i], groom.points.begin() + 3 * groom.offsets[i + 1],
+                                   longer.points.begin() + 3 * longer.offsets[i]);
+      if (ply.regions[i] == 12) {  // tail
+        ++tails;
+        scaled += std::abs(length(longer, i) / length(groom, i) - 1.5) < 0.015;
+      } else {
+        ++others, identical += same;
+      }
+      regions.push_back(ply.regions[i]);
+    }
+    CHECK(tails > 0);
+    CHECK(scaled == tails);
+    CHECK(identical == others);
+    const Result shave = run("edit --work " + work.string() + " --out " + (root / "edit_shave").string() + " --shave tail --set body.density=0.5");
+    INFO(shave.output);
+    REQUIRE(shave.code == 0);
+    CHECK(shave.output.find("Blender hair: blender -b -P") != std::string::npos);
+    const nf::io::StrandSet shaved = nf::io::read_strands_ply(root / "edit_shave" / "fur.ply");
+    int shaved_body = 0, groom_body = 0;
+    for (std::uint16_t region : shaved.regions) {
+      CHECK(region != 12);
+      shaved_body += region == 14;
+    }
+    for (std::int32_t region : regions) groom_body += region == 14;
+    CHECK(double(shaved_body) == doctest::Approx(0.5 * groom_body).epsilon(0.15));
+    CHECK(run("edit --work " + work.string() + " --out " + (work / "inside").string() + " --shave tail").code == 2);
+    CHECK(run("edit --work " + work.string() + " --out " + (root / "edit_bad").string() + " --set tial.length_cm=3").code == 2);
+  }
+  // nf_gpu pose: the head turned; the body moves where the head's joints own it, the groom with it.
+  {
+    const Result posed = run("pose --work " + work.string() + " --out " + (root / "posed").string() + " --set joint.head=0,40,0 --json");
+    INFO(posed.output);
+    REQUIRE(posed.code == 0);
+    const nf::geometry::Mesh moved = nf::io::read_mesh_gltf(root / "posed" / "body.glb");
+    REQUIRE(moved.vertex_count() == body_glb.vertex_count());
+    int changed = 0;
+    for (std::size_t i = 0; i < moved.positions.size(); ++i) changed += std::abs(moved.positions[i] - body_glb.positions[i]) > 1e-4f;
+    CHECK(changed > 10);
+    CHECK(changed < int(moved.positions.size()) / 2);
+    CHECK(nf::io::read_hair(root / "posed" / "fur.hair").strand_count() == 2500);
+    CHECK(nf::io::read_skeleton_gltf(root / "posed" / "body.glb").joint_count() == skeleton.joint_count());
+    const Result wrong = run("pose --work " + work.string() + " --out " + (root / "posed2").string() + " --set joint.hed=0,40,0");
+    CHECK(wrong.code == 2);
+    CHECK(wrong.output.find("joints: ") != std::string::npos);
+  }
   // Knowledge without any fur: defur still makes M_bald, frames finds no roots and says so.
   const fs::path bald_knowledge = root / "bald_knowledge.json";
   {
@@ -427,6 +525,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   const nf::json none = nf::json::parse(hairless.output.substr(hairless.output.find('[')));
   CHECK(none[4]["summary"]["roots"] == 0);
   CHECK(none[5]["summary"]["strands"] == 0);  // the fur stage writes an empty groom and says why
+  CHECK(none[6]["summary"]["strands"] == 0);  // and the export writes empty groom files beside the body
   CHECK(hairless.output.find("every region of the knowledge is bald") != std::string::npos);
   CHECK(nf::io::read_hair(work / "fur" / "strands.hair").strand_count() == 0);
   // --scene-scale overrides the scene's unit; annotate prints the table; an edited file feeds back.
@@ -488,7 +587,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   // The README's tables are the ones the declarations make (regenerate them with --markdown).
   std::ifstream readme(NF_README);
   const std::string manual(std::istreambuf_iterator<char>(readme), {});
-  for (const std::string stage : {"neus", "body", "knowledge", "defur", "frames", "fur"}) {
+  for (const std::string stage : {"neus", "body", "knowledge", "defur", "frames", "fur", "export"}) {
     const Result table = run("reconstruct --help-stage " + stage + " --markdown");
     CHECK_MESSAGE(manual.find("### `" + stage + "`\n\n" + table.output) != std::string::npos,
                   "README.md's " << stage << " settings table is stale: paste `nf_gpu reconstruct --help-stage " << stage

@@ -1,0 +1,146 @@
+#include "engine/pipeline/export_stage.hpp"
+
+#include "engine/core/error.hpp"
+#include "engine/core/log.hpp"
+#include "engine/export/body_rig.hpp"
+#include "engine/export/region_edits.hpp"
+#include "engine/fur/roots.hpp"
+#include "engine/io/json_fields.hpp"
+#include "engine/io/mesh.hpp"
+#include "engine/io/npz.hpp"
+#include "engine/knowledge/knowledge.hpp"
+#include "engine/pipeline/body_stage.hpp"
+#include "engine/pipeline/defur_stage.hpp"
+#include "engine/pipeline/export_files.hpp"
+#include "engine/pipeline/fur_stage.hpp"
+#include "engine/pipeline/knowledge_stage.hpp"
+
+namespace nf::pipeline {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr int kStageVersion = 1;
+
+ExportOptions export_preset(const std::string& quality) {
+  ExportOptions o;
+  if (quality == "draft") o.turntable_frames = 8, o.compare_views = 2, o.preview_size = 256, o.preview_strands = 20000;
+  else if (quality == "paper") o.turntable_frames = 24, o.compare_views = 5, o.preview_size = 512, o.preview_strands = 60000;
+  return o;
+}
+
+}  // namespace
+
+const SettingsSchema<ExportOptions>& export_settings() {
+  using E = ExportOptions;
+  static const SettingsSchema<E> schema = [] {
+    SettingsSchema<E> s("export", export_preset);
+    s.text("formats", [](E& e) -> auto& { return e.formats; }, {}, "groom files, comma-separated: usda, hair, ply, obj")
+        .add("tip_width", [](E& e) -> auto& { return e.tip_width; }, 0, 1, "a strand's width at its tip as a share of the root's (the region's thickness)")
+        .add("turntable_frames", [](E& e) -> auto& { return e.turntable_frames; }, 0, 360, "preview frames around the animal (0: none)")
+        .add("compare_views", [](E& e) -> auto& { return e.compare_views; }, 0, 1000, "held-out photos shown beside the groom's render (0: none)")
+        .add("preview_size", [](E& e) -> auto& { return e.preview_size; }, 16, 8192, "previews' longer side in pixels")
+        .add("preview_strands", [](E& e) -> auto& { return e.preview_strands; }, 0, 1e7, "strands drawn in the previews (an even subset)")
+        .check([](const E& e) { (void)e.format_list(); });
+    return s;
+  }();
+  return schema;
+}
+
+exporter::ExportFrame read_export_frame(const ExportOutputs& o) {
+  const json j = io::read_json_file(o.record());
+  const io::JsonField frame = io::JsonField(j, o.record().string()).at("frame");
+  exporter::ExportFrame f;
+  f.world_to_export = io::matrix_rows(frame.at("world_to_export"));
+  const io::JsonField m = frame.at("metres_per_scene_unit");
+  if (!(m.number() > 0)) m.fail("expected a positive number");
+  f.metres_per_unit = m.number();
+  return f;
+}
+
+void require_export(const fs::path& work) {
+  if (!fs::exists(export_outputs(work).record()) || !fs::exists(export_outputs(work).body()))
+    throw InputError(work.string() + ": no finished export stage (export/export.json, export/body.glb); run nf_gpu reconstruct to the end first");
+}
+
+io::Skeleton read_export_skeleton(const fs::path& work, const geometry::Mesh& bald) {
+  const fs::path glb = export_outputs(work).body();
+  io::Skeleton s = io::read_skeleton_gltf(glb);
+  if (s.skin_weights.size() != io::kJointInfluences * bald.vertex_count())
+    throw InputError(glb.string() + ": its skin has " + std::to_string(s.skin_weights.size() / io::kJointInfluences) +
+                     " vertices but defur/bald.ply has " + std::to_string(bald.vertex_count()) + "; rerun the export stage");
+  return s;
+}
+
+ExportOptions preview_options(const std::string& quality, const std::string& formats) {
+  ExportOptions o = export_settings().resolve(quality, json::object());
+  if (!formats.empty()) o.formats = formats;
+  (void)o.format_list();
+  o.compare_views = 0;  // the photos belong to the reconstruction, not to an edit or a pose
+  return o;
+}
+
+GroomInput read_groom(const fs::path& strands, const fs::path& regions, const fs::path& roots_file) {
+  GroomInput g;
+  g.strands = io::stream_hair_file(strands);
+  const io::NpyArray region = io::read_npz_array(regions, "region");
+  const fur::Roots roots = fur::read_roots(roots_file);
+  const std::uint64_t n = g.strands.strands;
+  if (region.values.size() != n)
+    throw InputError(regions.string() + ": 'region' has " + std::to_string(region.values.size()) + " entries for the " + std::to_string(n) +
+                     " strands of " + strands.string());
+  if (roots.size() != n)
+    throw InputError(roots_file.string() + ": " + std::to_string(roots.size()) + " roots for the " + std::to_string(n) + " strands of " +
+                     strands.string() + "; rerun the fur stage");
+  g.region.assign(region.values.begin(), region.values.end());
+  g.root_face = roots.face;
+  g.root_barycentric = roots.barycentric;
+  return g;
+}
+
+std::vector<fs::path> ExportStage::inputs(const StageContext& c) const {
+  const FurOutputs f = fur_outputs(c.work);
+  const BodyOutputs b = body_outputs(c.work);
+  std::vector<fs::path> files{f.strands(), f.regions(), f.metrics(), defur_outputs(c.work).bald(), b.fit_state(), b.animal_frame(),
+                              knowledge_outputs(c.work).knowledge(), knowledge_outputs(c.work).scale()};
+  if (fs::exists(f.roots())) files.push_back(f.roots());
+  const std::string model = body_settings().resolve(c.quality, c.settings.value("body", json::object())).model;
+  if (!model.empty()) files.push_back(model);
+  return files;
+}
+
+json ExportStage::parameters(const StageContext& c) const {
+  return {{"stage_version", kStageVersion},
+          {"settings", export_settings().values(c.quality, c.settings.value("export", json::object()))},
+          {"body_model", body_settings().values(c.quality, c.settings.value("body", json::object())).value("model", "")},
+          {"hold_out_every", fur_settings().resolve(c.quality, c.settings.value("fur", json::object())).hold_out_every}};
+}
+
+json ExportStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) {
+  const ExportOptions o = export_settings().resolve(c.quality, c.settings.value("export", json::object()));
+  const body::BodyModel model = body_model_of(body_settings().resolve(c.quality, c.settings.value("body", json::object())));
+  const BodyOutputs b = body_outputs(c.work);
+  const body::BodyFit fit = read_body_fit(b, model);
+  const geometry::Mesh bald = io::read_mesh(defur_outputs(c.work).bald());
+  const double cm = read_metric_scale(knowledge_outputs(c.work));
+  const knowledge::Knowledge knowledge = knowledge::read_knowledge(knowledge_outputs(c.work).knowledge());
+  const FurOutputs f = fur_outputs(c.work);
+  const GroomInput groom = read_groom(f.strands(), f.regions(), groom_roots_file(c.work));
+
+  ExportScene scene;
+  scene.bald_world = &bald;
+  scene.frame = exporter::export_frame(read_animal_to_world(b), cm, bald);
+  const io::Skeleton skeleton = exporter::transfer_rig(model, fit, bald, scene.frame);
+  scene.skeleton = &skeleton;
+  scene.thickness_cm = exporter::region_thickness_cm(knowledge, {});
+  scene.scene = &c.scene;
+  const int every = fur_settings().resolve(c.quality, c.settings.value("fur", json::object())).hold_out_every;
+  for (std::uint32_t v = 0; v < c.scene.cameras.size(); ++v)
+    if (every > 0 && v % std::uint32_t(every) == std::uint32_t(every) - 1) scene.compare_cameras.push_back(v);
+  if (scene.compare_cameras.empty() && !c.scene.cameras.empty()) scene.compare_cameras.push_back(0);
+  OutputFolder folder(out_dir);
+  json record = write_export(folder, groom, scene, o);
+  log::info("export: ", groom.strands.strands, " strands and the rigged body (", skeleton.joint_count(), " joints)");
+  return record;
+}
+
+}  // namespace nf::pipeline

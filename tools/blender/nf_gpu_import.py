@@ -1,0 +1,249 @@
+# nf_gpu result -> Blender: the rigged body (body.glb) and the groom (fur.hair) as Blender's native
+# hair curves (the Curves object of Blender 3.3+) attached to the body's surface, so Blender's hair
+# tools can comb, cut and grow it.
+#
+# As an add-on: Edit > Preferences > Add-ons > Install..., pick this file, enable "nf_gpu groom
+# import"; then File > Import > nf_gpu groom (pick the export folder's export.json).
+# Headless:   blender -b -P tools/blender/nf_gpu_import.py -- EXPORT_DIR [--save OUT.blend]
+#             [--max-strands N] [--points-per-strand P] [--report REPORT.json]
+#
+# Debian's Blender 3.4 is built without USD and Alembic, which is why this add-on exists: it reads
+# the formats nf_gpu writes (glTF and Cem Yuksel's .hair) with Blender's own glTF importer and a
+# small .hair reader, and builds the hair curves through Blender's operators (3.4 has no Python API
+# that adds curves to a Curves object: an edge mesh becomes a legacy curve, then hair curves).
+bl_info = {
+    "name": "nf_gpu groom import",
+    "author": "nf_gpu",
+    "version": (1, 0, 0),
+    "blender": (3, 4, 0),
+    "location": "File > Import > nf_gpu groom",
+    "description": "Imports an nf_gpu export folder: rigged body and hair curves attached to it",
+    "category": "Import-Export",
+}
+
+import json
+import os
+import struct
+import sys
+
+import bpy
+import numpy as np
+
+HAIR_SEGMENTS, HAIR_POINTS, HAIR_THICKNESS = 1, 2, 4
+
+# Debian 12 pairs Blender 3.4 with numpy 1.24, which removed `np.bool`; the glTF importer of 3.4
+# still uses it when it guesses flat faces from normals (import_shading="NORMALS", its default),
+# and fails. The add-on imports with smooth shading, which avoids that code; restoring the alias
+# (numpy's own bool type, what the name meant) also mends File > Import > glTF for the session.
+if "bool" not in np.__dict__:
+    np.bool = np.bool_
+
+
+def read_hair(path):
+    """Cem Yuksel's .hair: (points per strand array, xyz float32 array (N, 3), thickness or None)."""
+    with open(path, "rb") as f:
+        header = f.read(128)
+        if len(header) < 128 or header[:4] != b"HAIR":
+            raise ValueError(f"{path}: not a .hair file")
+        hair_count, point_count, arrays, default_segments = struct.unpack_from("<4I", header, 4)
+        if not arrays & HAIR_POINTS:
+            raise ValueError(f"{path}: the file has no points array")
+        if arrays & HAIR_SEGMENTS:
+            counts = np.frombuffer(f.read(2 * hair_count), dtype="<u2").astype(np.int64) + 1
+        else:
+            counts = np.full(hair_count, default_segments + 1, dtype=np.int64)
+        if int(counts.sum()) != point_count:
+            raise ValueError(f"{path}: strands hold {int(counts.sum())} points, the header says {point_count}")
+        points = np.frombuffer(f.read(12 * point_count), dtype="<f4").reshape(-1, 3)
+        if len(points) != point_count:
+            raise ValueError(f"{path}: truncated points array")
+        thickness = None
+        if arrays & HAIR_THICKNESS:
+            thickness = np.frombuffer(f.read(4 * point_count), dtype="<f4")
+    return counts, points, thickness
+
+
+def select_strands(counts, points, thickness, max_strands, points_per_strand):
+    """An even subset of the strands, each resampled to `points_per_strand` points (0: as they are)."""
+    n = len(counts)
+    keep = np.arange(n) if not max_strands or max_strands >= n else np.linspace(0, n - 1, max_strands).astype(np.int64)
+    if n and np.all(counts == counts[0]):  # nf_gpu's grooms: every strand has the same count, so no loop
+        c = int(counts[0])
+        pick = np.arange(c) if not points_per_strand or c <= points_per_strand else np.linspace(0, c - 1, points_per_strand).round().astype(np.int64)
+        p = points.reshape(n, c, 3)[keep][:, pick].reshape(-1, 3)
+        t = thickness.reshape(n, c)[keep][:, pick].ravel() if thickness is not None else None
+        return keep, np.full(len(keep), len(pick), dtype=np.int64), p, t
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    out_counts, out_points, out_thick = [], [], []
+    for s in keep:
+        c = int(counts[s])
+        p = points[starts[s]:starts[s] + c]
+        t = thickness[starts[s]:starts[s] + c] if thickness is not None else None
+        if points_per_strand and c > points_per_strand:
+            pick = np.linspace(0, c - 1, points_per_strand).round().astype(np.int64)
+            p = p[pick]
+            t = t[pick] if t is not None else None
+        out_counts.append(len(p))
+        out_points.append(p)
+        if t is not None:
+            out_thick.append(t)
+    return (keep, np.array(out_counts, dtype=np.int64), np.concatenate(out_points) if out_points else np.zeros((0, 3), np.float32),
+            np.concatenate(out_thick) if out_thick else None)
+
+
+def import_body(folder):
+    before = set(bpy.data.objects)
+    bpy.ops.import_scene.gltf(filepath=os.path.join(folder, "body.glb"), import_shading="SMOOTH")
+    new = [o for o in bpy.data.objects if o not in before]
+    body = next((o for o in new if o.type == "MESH"), None)
+    armature = next((o for o in new if o.type == "ARMATURE"), None)
+    if body is None:
+        raise RuntimeError(f"{folder}/body.glb: no mesh was imported")
+    return body, armature
+
+
+def make_hair_curves(name, counts, points, radii, regions, body):
+    """Blender hair curves (Curves object) with the given strands, attached to `body`'s surface."""
+    mesh = bpy.data.meshes.new(name)
+    mesh.vertices.add(len(points))
+    mesh.vertices.foreach_set("co", points.astype(np.float32).ravel())
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    first = np.concatenate([np.arange(s, s + c - 1) for s, c in zip(starts, counts)]) if len(counts) else np.zeros(0, np.int64)
+    edges = np.stack([first, first + 1], axis=1).astype(np.int32)
+    mesh.edges.add(len(edges))
+    mesh.edges.foreach_set("vertices", edges.ravel())
+    mesh.update()
+    obj = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    for o in bpy.context.selected_objects:
+        o.select_set(False)
+    bpy.context.view_layer.objects.active = obj
+    obj.select_set(True)
+    bpy.ops.object.convert(target="CURVE")   # edge chains -> poly splines, in strand order
+    bpy.ops.object.convert(target="CURVES")  # -> hair curves
+    hair = bpy.context.view_layer.objects.active
+    if hair.type != "CURVES" or len(hair.data.curves) != len(counts):
+        raise RuntimeError(f"hair curves: expected {len(counts)} curves, Blender made {len(hair.data.curves) if hair.type == 'CURVES' else hair.type}")
+    hair.name = name
+    if radii is not None:
+        attribute = hair.data.attributes.get("radius") or hair.data.attributes.new("radius", "FLOAT", "POINT")
+        attribute.data.foreach_set("value", radii.astype(np.float32))
+    if regions is not None:
+        attribute = hair.data.attributes.new("region", "INT", "CURVE")
+        attribute.data.foreach_set("value", regions.astype(np.int32))
+    # Attach to the body: a UV map on the surface, then Blender's own snapping records each curve's
+    # surface coordinate (the roots lie on the skin, so the nearest point is the root's place).
+    if not body.data.uv_layers:
+        for o in bpy.context.selected_objects:
+            o.select_set(False)
+        bpy.context.view_layer.objects.active = body
+        body.select_set(True)
+        bpy.ops.object.mode_set(mode="EDIT")
+        bpy.ops.mesh.select_all(action="SELECT")
+        bpy.ops.uv.smart_project(island_margin=0.002)
+        bpy.ops.object.mode_set(mode="OBJECT")
+    hair.data.surface = body
+    hair.data.surface_uv_map = body.data.uv_layers[0].name
+    for o in bpy.context.selected_objects:
+        o.select_set(False)
+    bpy.context.view_layer.objects.active = hair
+    hair.select_set(True)
+    bpy.ops.curves.snap_curves_to_surface(attach_mode="NEAREST")
+    hair.parent = body
+    hair.matrix_parent_inverse = body.matrix_world.inverted()
+    return hair
+
+
+def import_groom(folder, max_strands=0, points_per_strand=0):
+    """Imports an nf_gpu export folder; returns a report (what the tests check)."""
+    folder = os.path.abspath(folder)
+    record = json.load(open(os.path.join(folder, "export.json")))
+    body, armature = import_body(folder)
+    counts, points, thickness = read_hair(os.path.join(folder, "fur.hair"))
+    regions = None
+    roots_file = os.path.join(folder, "roots.npz")
+    if os.path.exists(roots_file):
+        regions = np.load(roots_file)["region"]
+    keep, sel_counts, sel_points, sel_thick = select_strands(counts, points, thickness, max_strands, points_per_strand)
+    # glTF's +y up becomes Blender's +z up: the same conversion Blender's glTF importer applies.
+    converted = np.stack([sel_points[:, 0], -sel_points[:, 2], sel_points[:, 1]], axis=1) if len(sel_points) else sel_points
+    hair = make_hair_curves("nf_gpu_fur", sel_counts, converted, None if sel_thick is None else 0.5 * sel_thick,
+                            None if regions is None else regions[keep], body)
+    surface_uv = hair.data.attributes.get("surface_uv_coordinate")
+    uv = np.zeros(2 * len(hair.data.curves), np.float32)
+    if surface_uv is not None:
+        surface_uv.data.foreach_get("vector", uv)
+    return {
+        "blender": bpy.app.version_string,
+        "strands_in_file": int(len(counts)),
+        "points_in_file": int(counts.sum()),
+        "curves": len(hair.data.curves),
+        "points": len(hair.data.points),
+        "expected_curves": int(len(sel_counts)),
+        "expected_points": int(sel_counts.sum()),
+        "surface": hair.data.surface.name if hair.data.surface else None,
+        "surface_uv_map": hair.data.surface_uv_map,
+        "attached_curves": int(np.count_nonzero(np.abs(uv.reshape(-1, 2)).sum(axis=1) > 0)),
+        "body": body.name,
+        "body_vertices": len(body.data.vertices),
+        "armature": armature.name if armature else None,
+        "bones": len(armature.data.bones) if armature else 0,
+        "strands_exported": record.get("strands"),
+    }
+
+
+class ImportNfGpuGroom(bpy.types.Operator):
+    """Import an nf_gpu export folder (body.glb and fur.hair) as a rigged body with hair curves"""
+    bl_idname = "import_scene.nf_gpu_groom"
+    bl_label = "Import nf_gpu groom"
+    bl_options = {"REGISTER", "UNDO"}
+    filepath: bpy.props.StringProperty(subtype="FILE_PATH")
+    filter_glob: bpy.props.StringProperty(default="export.json", options={"HIDDEN"})
+    max_strands: bpy.props.IntProperty(name="Max strands", default=100000, min=0, description="0: all")
+    points_per_strand: bpy.props.IntProperty(name="Points per strand", default=32, min=0, description="0: as in the file")
+
+    def execute(self, context):
+        report = import_groom(os.path.dirname(self.filepath), self.max_strands, self.points_per_strand)
+        self.report({"INFO"}, f"nf_gpu: {report['curves']} hair curves on {report['body']}")
+        return {"FINISHED"}
+
+    def invoke(self, context, event):
+        context.window_manager.fileselect_add(self)
+        return {"RUNNING_MODAL"}
+
+
+def menu_import(self, context):
+    self.layout.operator(ImportNfGpuGroom.bl_idname, text="nf_gpu groom (export.json)")
+
+
+def register():
+    bpy.utils.register_class(ImportNfGpuGroom)
+    bpy.types.TOPBAR_MT_file_import.append(menu_import)
+
+
+def unregister():
+    bpy.types.TOPBAR_MT_file_import.remove(menu_import)
+    bpy.utils.unregister_class(ImportNfGpuGroom)
+
+
+def main(argv):
+    import argparse
+    parser = argparse.ArgumentParser(prog="blender -b -P nf_gpu_import.py --")
+    parser.add_argument("folder", help="an nf_gpu export folder (WORK/export, or an edit's / a pose's --out)")
+    parser.add_argument("--save", help="write the scene to this .blend")
+    parser.add_argument("--max-strands", type=int, default=0, help="an even subset of the strands (0: all)")
+    parser.add_argument("--points-per-strand", type=int, default=0, help="resample each strand (0: as in the file)")
+    parser.add_argument("--report", help="write what was imported as JSON")
+    args = parser.parse_args(argv)
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    report = import_groom(args.folder, args.max_strands, args.points_per_strand)
+    print("nf_gpu import:", json.dumps(report))
+    if args.report:
+        with open(args.report, "w") as f:
+            json.dump(report, f, indent=2)
+    if args.save:
+        bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(args.save))
+
+
+if __name__ == "__main__":
+    main(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else [])
