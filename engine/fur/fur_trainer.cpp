@@ -176,6 +176,9 @@ FurTrainer::FurTrainer(gpu::Context& context, const FurTrainingData& data, Stran
     : context_(context), data_(data), options_(options), field_config_(field) {
   options_.validate();
   if (data.roots.size() == 0) throw InputError("fur: there are no roots (every region is bald); there is no fur to grow");
+  double total = 0;
+  for (float l : data.roots.length) total += l;
+  mean_root_length_ = total / double(data.roots.size());
   field_ = std::make_unique<FurField>(context, field, prior, root_box(data.roots), options.seed);
   if (options.warm_start) {
     const std::vector<float> z = lifted_strand_latent(prior, options.lying_angle_deg);
@@ -195,10 +198,7 @@ FurTrainer::~FurTrainer() = default;
 
 double FurTrainer::strand_width(std::uint32_t strands) const {
   if (options_.strand_width > 0 || !(data_.fur_area > 0)) return (options_.strand_width > 0 ? options_.strand_width : 0.0025) * data_.scene_radius;
-  double mean_length = 0;
-  for (float l : data_.roots.length) mean_length += l;
-  mean_length /= double(data_.roots.size());
-  return options_.coverage * data_.fur_area / (2.0 * std::max(1u, strands) * mean_length);
+  return options_.coverage * data_.fur_area / (2.0 * std::max(1u, strands) * mean_root_length_);
 }
 
 std::uint32_t FurTrainer::batch() const { return impl_->batch.strands; }

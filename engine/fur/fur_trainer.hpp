@@ -127,6 +127,7 @@ class FurTrainer {
   FurStepReport train_step();
   gpu::Context& context_;
   const FurTrainingData& data_;
+  double mean_root_length_ = 1;  // of data_.roots (the splat width's denominator), computed once
   FurTrainingOptions options_;
   FurFieldConfig field_config_;
   std::unique_ptr<FurField> field_;
