@@ -77,6 +77,15 @@ check("attached to the body", report["surface"] == report["body"] and report["at
       f"surface {report['surface']}, UV map {report['surface_uv_map']}, {report['attached_curves']} of {report['curves']} curves have a surface coordinate")
 check("rig imported", report["bones"] == record["joints"], f"{report['bones']} bones")
 
+# 4. The add-on installs and enables from Blender's preferences (what a user does once).
+bpy.ops.wm.read_factory_settings(use_empty=True)
+bpy.ops.preferences.addon_install(filepath=addon_path, overwrite=True)
+bpy.ops.preferences.addon_enable(module="nf_gpu_import")
+menu = hasattr(bpy.ops.import_scene, "nf_gpu_groom") and "nf_gpu_import" in bpy.context.preferences.addons
+check("add-on installs", menu, "File > Import > nf_gpu groom is " + ("registered" if menu else "missing"))
+bpy.ops.preferences.addon_disable(module="nf_gpu_import")
+bpy.ops.preferences.addon_remove(module="nf_gpu_import")
+
 print("nf_gpu blender test:", json.dumps({"blender": bpy.app.version_string, "results": results}))
 if not all(r["ok"] for r in results.values()):
     raise SystemExit(1)

@@ -1,0 +1,64 @@
+#pragma once
+// Running the nf_gpu binary from a test (NF_GPU_BINARY, set by tests/CMakeLists.txt): in the
+// foreground with its exit code and output, or in the background to signal it.
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <thread>
+
+#include <doctest/doctest.h>
+
+#include "tests/support/files.hpp"
+
+namespace nf::test {
+
+struct Result {
+  int code;
+  std::string output;  // stdout and stderr together
+};
+
+inline Result run(const std::string& args, const std::string& env = "") {
+  const std::string command = env + " " + std::string(NF_GPU_BINARY) + " " + args + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  REQUIRE(pipe != nullptr);
+  Result r{0, {}};
+  char buffer[4096];
+  while (std::size_t n = std::fread(buffer, 1, sizeof buffer, pipe)) r.output.append(buffer, n);
+  const int status = pclose(pipe);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+// Starts nf_gpu in the background with its output going to `log`.
+inline pid_t spawn(const std::string& args, const std::filesystem::path& log) {
+  const std::string command = "exec " + std::string(NF_GPU_BINARY) + " " + args + " > " + log.string() + " 2>&1";
+  const pid_t pid = fork();
+  if (pid == 0) {
+    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  return pid;
+}
+
+// Waits until `log` holds `text` (true) or `seconds` pass (false).
+inline bool wait_for(const std::filesystem::path& log, const std::string& text, double seconds) {
+  for (int i = 0; i < int(seconds * 20); ++i) {
+    if (slurp(log).find(text) != std::string::npos) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return false;
+}
+
+inline int wait_exit(pid_t pid) {
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+
+}  // namespace nf::test
