@@ -83,8 +83,12 @@ bpy.ops.preferences.addon_install(filepath=addon_path, overwrite=True)
 bpy.ops.preferences.addon_enable(module="nf_gpu_import")
 menu = hasattr(bpy.ops.import_scene, "nf_gpu_groom") and "nf_gpu_import" in bpy.context.preferences.addons
 check("add-on installs", menu, "File > Import > nf_gpu groom is " + ("registered" if menu else "missing"))
-bpy.ops.preferences.addon_disable(module="nf_gpu_import")
-bpy.ops.preferences.addon_remove(module="nf_gpu_import")
+# Leave the user's Blender as it was (the preferences' remove operator needs a window).
+import addon_utils  # noqa: E402  (Blender's module)
+addon_utils.disable("nf_gpu_import")
+installed = os.path.join(bpy.utils.user_resource("SCRIPTS", path="addons"), "nf_gpu_import.py")
+if os.path.exists(installed):
+    os.remove(installed)
 
 print("nf_gpu blender test:", json.dumps({"blender": bpy.app.version_string, "results": results}))
 if not all(r["ok"] for r in results.values()):
