@@ -510,6 +510,13 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   CHECK(no_model.code == 2);
   CHECK(no_model.output.find("knowledge.model") != std::string::npos);
 
+  // A unit that makes the fur 1,000 times longer than the animal is deep: a clear refusal that
+  // names the file, the regions and what to do (lengths of 1e-4 units run: see docs/export.md).
+  const Result absurd = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + body +
+                            " --set knowledge.preset=cat" + small + " --scene-scale 0.003 --to defur");
+  CHECK(absurd.code == 1);
+  CHECK(absurd.output.find("de-furring would leave nothing of the body") != std::string::npos);
+  CHECK(absurd.output.find("Lower thickness_cm in the knowledge") != std::string::npos);
   CHECK(run("reconstruct --scene " + scene.string() + " --out " + (scene / "work").string() + tiny).code == 2);
   CHECK(run("reconstruct --scene " + scene.string() + " --out " + work.string() + " --set nues.steps=3").code == 2);
   const Result bad = run("reconstruct --scene " + scene.string() + " --out " + work.string() + " --set neus.colour=3");
