@@ -76,6 +76,25 @@ check("hair points", report["points"] == int(counts.sum()), f"{report['points']}
 check("attached to the body", report["surface"] == report["body"] and report["attached_curves"] == report["curves"],
       f"surface {report['surface']}, UV map {report['surface_uv_map']}, {report['attached_curves']} of {report['curves']} curves have a surface coordinate")
 check("rig imported", report["bones"] == record["joints"], f"{report['bones']} bones")
+# The hair follows the skin: posing the head moves the curves rooted there, not the others.
+hair = bpy.data.objects["nf_gpu_fur"]
+rig = next(o for o in bpy.data.objects if o.type == "ARMATURE")
+
+
+def hair_points():
+    evaluated = hair.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    xyz = np.empty(3 * len(evaluated.data.points), np.float64)
+    evaluated.data.points.foreach_get("position", xyz)
+    return xyz.reshape(-1, 3)
+
+
+before = hair_points()
+head = rig.pose.bones["head"]
+head.rotation_mode = "XYZ"
+head.rotation_euler = (0.6, 0.0, 0.0)
+bpy.context.view_layer.update()
+moved = int(np.count_nonzero(np.linalg.norm(hair_points() - before, axis=1) > 1e-5))
+check("hair follows the posed skin", 0 < moved < len(before) // 2, f"rotating 'head' moved {moved} of {len(before)} hair points")
 
 # 4. The add-on installs and enables from Blender's preferences (what a user does once).
 bpy.ops.wm.read_factory_settings(use_empty=True)

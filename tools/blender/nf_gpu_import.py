@@ -151,7 +151,26 @@ def make_hair_curves(name, counts, points, radii, regions, body):
     bpy.ops.curves.snap_curves_to_surface(attach_mode="NEAREST")
     hair.parent = body
     hair.matrix_parent_inverse = body.matrix_world.inverted()
+    follow_skin(hair, body)
     return hair
+
+
+def follow_skin(hair, body):
+    """The curves follow the body's deformation (the armature): Blender's Deform Curves on Surface
+    node, which needs the surface's undeformed positions as a `rest_position` attribute."""
+    coordinates = np.empty(3 * len(body.data.vertices), np.float32)
+    body.data.vertices.foreach_get("co", coordinates)
+    rest = body.data.attributes.get("rest_position") or body.data.attributes.new("rest_position", "FLOAT_VECTOR", "POINT")
+    rest.data.foreach_set("vector", coordinates)
+    tree = bpy.data.node_groups.new("nf_gpu follow the skin", "GeometryNodeTree")
+    tree.inputs.new("NodeSocketGeometry", "Geometry")
+    tree.outputs.new("NodeSocketGeometry", "Geometry")
+    group_in, group_out = tree.nodes.new("NodeGroupInput"), tree.nodes.new("NodeGroupOutput")
+    deform = tree.nodes.new("GeometryNodeDeformCurvesOnSurface")
+    tree.links.new(group_in.outputs[0], deform.inputs[0])
+    tree.links.new(deform.outputs[0], group_out.inputs[0])
+    modifier = hair.modifiers.new("nf_gpu follow the skin", "NODES")
+    modifier.node_group = tree
 
 
 def import_groom(folder, max_strands=0, points_per_strand=0):
