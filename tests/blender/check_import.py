@@ -19,6 +19,13 @@ counts, points, _ = addon.read_hair(os.path.join(folder, "fur.hair"))
 results = {}
 
 
+def turn_head(armature, radians=0.6):
+    bone = armature.pose.bones["head"]
+    bone.rotation_mode = "XYZ"
+    bone.rotation_euler = (radians, 0.0, 0.0)
+    bpy.context.view_layer.update()
+
+
 def check(name, ok, detail):
     results[name] = {"ok": bool(ok), "detail": detail}
     print(f"nf_gpu blender test: {'PASS' if ok else 'FAIL'} {name}: {detail}")
@@ -44,10 +51,7 @@ def evaluated_coordinates():
 
 
 rest = evaluated_coordinates()
-bone = armature.pose.bones["head"]
-bone.rotation_mode = "XYZ"
-bone.rotation_euler = (0.6, 0.0, 0.0)
-bpy.context.view_layer.update()
+turn_head(armature)
 posed = evaluated_coordinates()
 moved = int(np.count_nonzero(np.linalg.norm(posed - rest, axis=1) > 1e-4))
 check("posed bone moves vertices", 0 < moved < len(rest) // 2, f"rotating 'head' moved {moved} of {len(rest)} vertices")
@@ -89,10 +93,7 @@ def hair_points():
 
 
 before = hair_points()
-head = rig.pose.bones["head"]
-head.rotation_mode = "XYZ"
-head.rotation_euler = (0.6, 0.0, 0.0)
-bpy.context.view_layer.update()
+turn_head(rig)
 moved = int(np.count_nonzero(np.linalg.norm(hair_points() - before, axis=1) > 1e-5))
 check("hair follows the posed skin", 0 < moved < len(before) // 2, f"rotating 'head' moved {moved} of {len(before)} hair points")
 
