@@ -5,6 +5,12 @@
 namespace nf {
 using json = nlohmann::json;
 
+// JSON text of a value that may hold text from outside (a VLM's answer, a file name): invalid UTF-8
+// is replaced by U+FFFD instead of throwing, as nlohmann's dump() does by default.
+inline std::string dump_text(const json& value, int indent = -1) {
+  return value.dump(indent, ' ', false, json::error_handler_t::replace);
+}
+
 // A 3-vector as [x, y, z] (glm vectors, float or double).
 template <class V>
 json json_vec3(const V& v) {

@@ -416,41 +416,43 @@ FurStepReport report_from_json(const json& j) {
 }
 }  // namespace
 
-bool FurTrainer::load_checkpoint(const std::filesystem::path& path) {
-  const nn::WeightsFile file = nn::load_weights(path);
-  const json& c = file.config;
-  if (!c.contains("kind") || c["kind"] != "fur checkpoint") throw InputError(path.string() + ": not a fur checkpoint");
-  if (c.value("version", 0) != kCheckpointVersion || c.value("field", json()) != field_config_.to_json() ||
-      c.value("options", json()) != to_json(options_))
-    return false;
-  const std::vector<float>& params = file.tensor("field", path).values;
-  const nn::Adam::State state = nn::state_from_tensors(file, "adam.field", path);
-  std::vector<float> decoder;
-  nn::Adam::State decoder_state;
-  if (impl_->adam_decoder) decoder = file.tensor("decoder", path).values, decoder_state = nn::state_from_tensors(file, "adam.decoder", path);
-  FurStepReport last;
-  std::vector<FurStepReport> history;
-  std::uint32_t step = 0;
-  double seconds = 0;
+FurCheckpointState parse_fur_checkpoint(const nn::WeightsFile& file, const std::filesystem::path& path, bool with_decoder) {
+  FurCheckpointState s;
+  s.field = file.tensor("field", path).values;
+  s.field_adam = nn::state_from_tensors(file, "adam.field", path);
+  if (with_decoder) s.decoder = file.tensor("decoder", path).values, s.decoder_adam = nn::state_from_tensors(file, "adam.decoder", path);
   try {
-    step = c.at("step").get<std::uint32_t>();
-    seconds = c.at("seconds").get<double>();
-    last = report_from_json(c.at("last"));
-    for (const json& r : c.at("history")) history.push_back(report_from_json(r));
+    const json& c = file.config;
+    s.step = c.at("step").get<std::uint32_t>();
+    s.seconds = c.at("seconds").get<double>();
+    s.last = report_from_json(c.at("last"));
+    for (const json& r : c.at("history")) s.history.push_back(report_from_json(r));
   } catch (const json::exception& e) {
     throw InputError(path.string() + ": " + e.what());
   }
-  if (params.size() != field_->mlp().parameters().size())
-    throw InputError(path.string() + ": the field has " + std::to_string(params.size()) + " parameters, this network " +
+  return s;
+}
+
+bool FurTrainer::load_checkpoint(const std::filesystem::path& path) {
+  const nn::WeightsFile file = nn::load_weights(path);
+  const json& c = file.config;
+  if (!c.is_object() || c.value("kind", json()) != "fur checkpoint") throw InputError(path.string() + ": not a fur checkpoint");
+  if (c.value("version", json()) != kCheckpointVersion || c.value("field", json()) != field_config_.to_json() ||
+      c.value("options", json()) != to_json(options_))
+    return false;
+  FurCheckpointState s = parse_fur_checkpoint(file, path, impl_->adam_decoder != nullptr);
+  if (s.field.size() != field_->mlp().parameters().size())
+    throw InputError(path.string() + ": the field has " + std::to_string(s.field.size()) + " parameters, this network " +
                      std::to_string(field_->mlp().parameters().size()));
-  field_->set_parameters(params);
-  impl_->adam->load_state(state);
+  if (impl_->adam_decoder && s.decoder.size() != field_->prior().decoder().parameters().size())
+    throw InputError(path.string() + ": the decoder's size differs");
+  field_->set_parameters(s.field);
+  impl_->adam->load_state(s.field_adam);
   if (impl_->adam_decoder) {
-    if (decoder.size() != field_->prior().decoder().parameters().size()) throw InputError(path.string() + ": the decoder's size differs");
-    field_->prior().decoder().parameters().upload(decoder);
-    impl_->adam_decoder->load_state(decoder_state);
+    field_->prior().decoder().parameters().upload(s.decoder);
+    impl_->adam_decoder->load_state(s.decoder_adam);
   }
-  step_ = step, seconds_ = seconds, last_ = last, history_ = std::move(history);
+  step_ = s.step, seconds_ = s.seconds, last_ = s.last, history_ = std::move(s.history);
   return true;
 }
 

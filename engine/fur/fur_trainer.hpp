@@ -28,6 +28,8 @@
 #include "engine/fur/fur_field.hpp"
 #include "engine/fur/fur_views.hpp"
 #include "engine/fur/roots.hpp"
+#include "engine/nn/adam.hpp"
+#include "engine/nn/weights_io.hpp"
 
 namespace nf::fur {
 
@@ -94,6 +96,18 @@ struct ViewScore {
   double orientation_error_deg = 0;  // rendered against Gabor, weighted by Gabor confidence on fur
   std::uint64_t pixels = 0;
 };
+
+// What a fur checkpoint holds besides its configuration, read and checked for form (tensors
+// present, fields of the right types) before anything is applied; InputError naming the file.
+struct FurCheckpointState {
+  std::vector<float> field, decoder;
+  nn::Adam::State field_adam, decoder_adam;
+  std::uint32_t step = 0;
+  double seconds = 0;
+  FurStepReport last;
+  std::vector<FurStepReport> history;
+};
+FurCheckpointState parse_fur_checkpoint(const nn::WeightsFile& file, const std::filesystem::path& path, bool with_decoder);
 
 class FurTrainer {
  public:

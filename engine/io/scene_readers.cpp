@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "engine/core/error.hpp"
+#include "engine/core/log.hpp"
 #include "engine/io/image_size.hpp"
 #include "engine/io/npz.hpp"
 #include "engine/io/scene.hpp"
@@ -75,11 +76,13 @@ Scene read_neus_scene(const fs::path& folder) {
   for (std::size_t i = 0; i < images.size(); ++i) {
     const std::string where = file.string() + ": world_mat_" + std::to_string(i);
     const NpyArray w = read_npz_array(file, "world_mat_" + std::to_string(i));
-    if (w.values.size() < 12) throw InputError(where + " must be 3x4 or 4x4");
+    // 3x4 or 4x4 (or the same flattened); rows of another length would be read across each other.
+    const bool matrix = w.shape.size() == 2 && (w.shape[0] == 3 || w.shape[0] == 4) && w.shape[1] == 4;
+    const bool flat = w.shape.size() == 1 && (w.values.size() == 12 || w.values.size() == 16);
+    if (!matrix && !flat) throw InputError(where + " must be 3x4 or 4x4, found " + std::to_string(w.values.size()) + " values");
     double P[3][4];
-    const std::size_t cols = w.shape.size() == 2 ? w.shape[1] : 4;
     for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 4; ++c) P[r][c] = w.values[std::size_t(r) * cols + std::size_t(c)];
+      for (int c = 0; c < 4; ++c) P[r][c] = w.values[std::size_t(r) * 4 + std::size_t(c)];
     Camera cam;
     decompose_projection(P, cam, where);
     cam.name = images[i].stem().string();
@@ -213,7 +216,9 @@ Scene read_colmap_scene(const fs::path& folder, const fs::path& masks) {
   return scene;
 }
 
-Scene read_scene(const fs::path& path) {
+namespace {
+
+Scene read_scene_format(const fs::path& path) {
   if (fs::is_regular_file(path) && path.extension() == ".json") return read_transforms_json(path);
   if (fs::exists(path / "transforms.json")) return read_transforms_json(path / "transforms.json");
   if (fs::exists(path / "cameras_sphere.npz")) return read_neus_scene(path);
@@ -222,6 +227,24 @@ Scene read_scene(const fs::path& path) {
   if (fs::exists(path / "sparse" / "0" / "cameras.txt"))
     return read_colmap_scene(path / "sparse" / "0", fs::exists(path / "masks") ? path / "masks" : fs::path());
   throw InputError(path.string() + ": no scene found (transforms.json, cameras_sphere.npz, CamPose.inf or COLMAP cameras.txt)");
+}
+
+}  // namespace
+
+Scene read_scene(const fs::path& path) {
+  Scene scene = read_scene_format(path);
+  // Photos cut out with an alpha channel (NeRF-style RGBA PNGs) and no mask file: the alpha is the
+  // mask (mask_of reads the last of 2 or 4 channels).
+  std::size_t from_alpha = 0;
+  for (Camera& c : scene.cameras)
+    if (c.mask.empty() && fs::exists(c.image)) {
+      const std::string ext = c.image.extension().string();
+      if (ext != ".png" && ext != ".PNG") continue;
+      const std::uint32_t channels = image_channels(c.image);
+      if (channels == 2 || channels == 4) c.mask = c.image, ++from_alpha;
+    }
+  if (from_alpha) log::info(path.string(), ": ", from_alpha, " camera(s) without a mask use their image's alpha channel as the mask");
+  return scene;
 }
 
 }  // namespace nf::io

@@ -50,7 +50,7 @@ std::string python_to_json(std::string_view s) {
           value += s[j];
         }
       }
-      out += json(value).dump();
+      out += dump_text(json(value));
       i = j + 1;
     } else if (c == '#') {
       while (i < s.size() && s[i] != '\n') ++i;
@@ -66,7 +66,7 @@ std::string python_to_json(std::string_view s) {
       while (k < s.size() && s[k] == ' ' && k + 1 < s.size() && is_ident_start(s[k + 1])) ++k;
       if (k < s.size() && is_ident_start(s[k])) {  // a number with a unit: keep it as text
         while (k < s.size() && is_ident(s[k])) ++k;
-        out += json(std::string(s.substr(i, k - i))).dump();
+        out += dump_text(json(std::string(s.substr(i, k - i))));
         i = k;
       } else {
         std::string number(s.substr(i, j - i));
@@ -83,7 +83,7 @@ std::string python_to_json(std::string_view s) {
       out += word == "True" || word == "true"     ? "true"
              : word == "False" || word == "false" ? "false"
              : word == "None" || word == "null"   ? "null"
-                                                  : json(word).dump();
+                                                  : dump_text(json(word));
       i = j;
     } else if (c == '(') {
       out += '[', ++i;

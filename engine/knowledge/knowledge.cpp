@@ -100,7 +100,7 @@ Knowledge read_knowledge(const std::filesystem::path& path) {
 }
 
 void write_knowledge(const std::filesystem::path& path, const Knowledge& k) {
-  write_file_atomic(path, knowledge_to_json(k).dump(2) + "\n");
+  write_file_atomic(path, dump_text(knowledge_to_json(k), 2) + "\n");
 }
 
 std::string region_table(const Knowledge& k) {

@@ -160,7 +160,7 @@ ChatReply chat_completion(const VlmEndpoint& e, const json& messages) {
   const std::string url = chat_completions_url(e.url);
   const std::string where = "VLM endpoint " + redacted_url(url) + " (model '" + e.model + "')";
   // Invalid UTF-8 cannot come from our own messages; replace rather than fail if it ever does.
-  const std::string request = chat_request_body(e, messages).dump(-1, ' ', false, json::error_handler_t::replace);
+  const std::string request = dump_text(chat_request_body(e, messages));
   for (const char c : e.api_key)
     if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
       throw InputError("NF_VLM_API_KEY holds a control character (a line break pasted with it?)");

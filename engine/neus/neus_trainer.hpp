@@ -13,6 +13,8 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "engine/core/json.hpp"
@@ -23,6 +25,7 @@
 #include "engine/neus/visual_hull.hpp"
 #include "engine/neus/volume_render.hpp"
 #include "engine/nn/adam.hpp"
+#include "engine/nn/weights_io.hpp"
 
 namespace nf::neus {
 
@@ -98,6 +101,19 @@ struct NeusStepReport {
 
 json to_json(const NeusStepReport& r);
 NeusStepReport step_report_from_json(const json& j);  // json::exception on a missing field
+
+// What a NeuS checkpoint holds besides its configuration, read and checked for form (tensors
+// present, fields of the right types) before anything is applied; InputError naming the file.
+struct NeusCheckpointState {
+  std::vector<std::pair<std::string, std::vector<float>>> params;  // hash_table (when used), sdf, colour
+  nn::Adam::State table_adam, sdf_adam, colour_adam;
+  std::vector<float> occupancy;
+  std::uint32_t step = 0, variance_t = 0;
+  double seconds = 0, variance = 0, variance_m = 0, variance_v = 0;
+  NeusStepReport last;
+  std::vector<NeusStepReport> history;
+};
+NeusCheckpointState parse_neus_checkpoint(const nn::WeightsFile& file, const std::filesystem::path& path, bool has_table);
 
 class NeusTrainer {
  public:

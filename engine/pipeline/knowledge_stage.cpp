@@ -59,9 +59,8 @@ class VlmSession {
 
   std::string chat(const json& messages, const std::string& step) {
     const std::string url = knowledge::redacted_url(knowledge::chat_completions_url(endpoint_.url));
-    const std::string key = hash_bytes(json{{"url", url}, {"model", endpoint_.model}, {"temperature", endpoint_.temperature},
-                                            {"sample", sample_}, {"messages", messages}}
-                                           .dump(-1, ' ', false, json::error_handler_t::replace));
+    const std::string key = hash_bytes(dump_text(json{{"url", url}, {"model", endpoint_.model}, {"temperature", endpoint_.temperature},
+                                                      {"sample", sample_}, {"messages", messages}}));
     const fs::path cached = cache_ / (key + ".json");
     json line{{"sample", sample_}, {"step", step}, {"url", url}, {"model", endpoint_.model}, {"messages", readable(messages)}};
     const auto start = std::chrono::steady_clock::now();
@@ -82,11 +81,11 @@ class VlmSession {
         reply = knowledge::chat_completion(endpoint_, messages);
       } catch (const Error& e) {  // the failed request is part of the record too
         line["error"] = e.what();
-        transcript_ << masked(line.dump(-1, ' ', false, json::error_handler_t::replace)) << "\n" << std::flush;
+        transcript_ << masked(dump_text(line)) << "\n" << std::flush;
         throw;
       }
       reply.content = masked(reply.content);
-      write_file_atomic(cached, json{{"answer", reply.content}, {"finish_reason", reply.finish_reason}}.dump() + "\n");
+      write_file_atomic(cached, dump_text(json{{"answer", reply.content}, {"finish_reason", reply.finish_reason}}) + "\n");
       written_.push_back(cached);
       ++sent, request_bytes += reply.request_bytes, answer_bytes += reply.answer_bytes, attempts += reply.attempts;
     } else {
@@ -100,7 +99,7 @@ class VlmSession {
     if (!hit) line["usage"] = reply.usage, line["attempts"] = reply.attempts, line["request_bytes"] = reply.request_bytes,
               line["answer_bytes"] = reply.answer_bytes;
     line["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    transcript_ << masked(line.dump(-1, ' ', false, json::error_handler_t::replace)) << "\n" << std::flush;
+    transcript_ << masked(dump_text(line)) << "\n" << std::flush;
     return reply.content;
   }
 
@@ -341,7 +340,7 @@ json KnowledgeStage::run(StageContext& c, const fs::path& out_dir, const fs::pat
   const json gt = ground_truth_metrics(c, scale, eye_units, animal_to_world);
   if (!gt.is_null()) summary["ground_truth"] = gt;
   summary["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  write_file_atomic(out.metrics(), summary.dump(2) + "\n");
+  write_file_atomic(out.metrics(), dump_text(summary, 2) + "\n");
   return summary;
 }
 

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <ctime>
-#include <fstream>
+#include <new>
 #include <set>
 
 #include "engine/core/atomic_file.hpp"
@@ -11,6 +11,7 @@
 #include "engine/core/error.hpp"
 #include "engine/core/log.hpp"
 #include "engine/core/text.hpp"
+#include "engine/pipeline/stage_record.hpp"
 
 namespace nf::pipeline {
 namespace fs = std::filesystem;
@@ -35,12 +36,38 @@ json stage_key(const Stage& stage, const StageContext& c) {
   return {{"version", kRecordVersion}, {"parameters", stage.parameters(c)}, {"inputs", inputs}};
 }
 
-json read_json(const fs::path& p) {
-  std::ifstream in(p);
+// The advice for a stage that ran out of memory: its memory settings with their values.
+std::string memory_advice(const Stage& stage, const StageContext& c) {
+  const std::vector<std::string> keys = stage.memory_settings();
+  if (keys.empty()) return "";
+  json values;
   try {
-    return json::parse(in);
-  } catch (const json::exception&) {
-    return json();  // an unreadable record counts as absent: the stage runs again
+    values = stage.settings().values(c.quality, c.settings.value(stage.name(), json::object()));
+  } catch (const Error&) {
+    values = json::object();
+  }
+  std::string advice = "; to need less memory, lower";
+  for (std::size_t k = 0; k < keys.size(); ++k)
+    advice += std::string(k ? "," : "") + " --set " + stage.name() + "." + keys[k] +
+              (values.contains(keys[k]) ? " (now " + values[keys[k]].dump() + ")" : "");
+  return advice + (c.quality == "draft" ? "" : ", or use --quality draft");
+}
+
+// Called in a catch block: device and memory failures get the stage's name and what to do; other
+// errors pass unchanged (they name their file or setting already).
+[[noreturn]] void rethrow_with_stage(const Stage& stage, const StageContext& c) {
+  const std::string where = "stage " + stage.name() + ": ";
+  const std::string resume = "; its last checkpoint is kept: rerun the same command to resume";
+  try {
+    throw;
+  } catch (const DeviceLostError& e) {
+    throw DeviceLostError(where + e.what() + resume + " (after the driver has recovered, or on another device with NF_DEVICE)");
+  } catch (const DeviceLimitError& e) {
+    throw DeviceLimitError(where + e.what() + memory_advice(stage, c));
+  } catch (const DeviceError& e) {
+    throw DeviceError(where + e.what());
+  } catch (const std::bad_alloc&) {
+    throw DeviceError(where + "out of host memory" + memory_advice(stage, c));
   }
 }
 
@@ -163,10 +190,10 @@ std::vector<StageOutcome> run_pipeline(const std::vector<std::unique_ptr<Stage>>
     StageOutcome outcome;
     outcome.name = name;
     if (!force && fs::exists(record)) {
-      const json previous = read_json(record);
-      if (previous.is_object() && previous.value("key", json()) == key) {
-        outcome.summary = previous.value("summary", json::object());
-        log::info("stage ", name, ": unchanged since ", previous.value("finished", std::string("?")), ", skipped");
+      const std::optional<StageRecord> previous = read_stage_record(record);
+      if (previous && previous->key == key) {
+        outcome.summary = previous->summary;
+        log::info("stage ", name, ": unchanged since ", previous->finished, ", skipped");
         for (const fs::path& leftover : {partial, old, resume}) fs::remove_all(leftover);  // a kill's leftovers
         outcomes.push_back(outcome);
         continue;
@@ -175,7 +202,7 @@ std::vector<StageOutcome> run_pipeline(const std::vector<std::unique_ptr<Stage>>
 
     fs::remove_all(partial);
     fs::create_directories(partial);
-    if (fs::exists(resume / "key.json") && read_json(resume / "key.json") != key) {
+    if (fs::exists(resume / "key.json") && read_json_or_null(resume / "key.json") != key) {
       log::info("stage ", name, ": its inputs or settings changed since the checkpoint; starting afresh");
       fs::remove_all(resume);
     }
@@ -188,7 +215,7 @@ std::vector<StageOutcome> run_pipeline(const std::vector<std::unique_ptr<Stage>>
       outcome.summary = stages[i]->run(c, partial, resume);
     } catch (...) {
       fs::remove_all(partial);  // half an output is no output; the checkpoint in `resume` stays
-      throw;
+      rethrow_with_stage(stage, c);
     }
     outcome.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     outcome.ran = true;
