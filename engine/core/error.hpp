@@ -36,6 +36,20 @@ class DeviceError : public Error {
   explicit DeviceError(const std::string& message) : Error(ExitCode::DeviceOrInternal, message) {}
 };
 
+// A request larger than the device allows: memory, one allocation, one binding's range, a dispatch's
+// workgroup count. The fix is a smaller setting (the pipeline names the stage's).
+class DeviceLimitError : public DeviceError {
+ public:
+  explicit DeviceLimitError(const std::string& message) : DeviceError(message) {}
+};
+
+// The device stopped working (VK_ERROR_DEVICE_LOST: a driver reset, a GPU fault or a hung kernel).
+// Nothing on it can be used any more; a new process can resume from the last checkpoint.
+class DeviceLostError : public DeviceError {
+ public:
+  explicit DeviceLostError(const std::string& message) : DeviceError(message) {}
+};
+
 // A broken invariant inside nf_gpu: always a bug.
 class InternalError : public Error {
  public:

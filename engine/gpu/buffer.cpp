@@ -49,13 +49,19 @@ Allocation allocate(Context::Impl& m, std::uint64_t bytes, VkMemoryPropertyFlags
   alloc.allocationSize = req.size;
   alloc.memoryTypeIndex = memory_type;
   a.memory_type = memory_type;
-  const VkResult r = vkAllocateMemory(m.device, &alloc, nullptr, &a.memory);
+  // More than the memory heap holds (on lavapipe: the machine's RAM, where the driver would
+  // overcommit and the kernel kill the process later) fails here, with the error below. So does
+  // more than NF_FAULT_DEVICE_MEMORY_MB, the tests' stand-in for a small device.
+  const std::uint64_t heap = m.memory_properties.memoryHeaps[m.memory_properties.memoryTypes[memory_type].heapIndex].size;
+  const std::uint64_t budget = m.options.fault_memory_bytes ? std::min(heap, m.options.fault_memory_bytes) : heap;
+  const VkResult r = m.allocated_bytes.load() + req.size > budget ? VK_ERROR_OUT_OF_DEVICE_MEMORY
+                                                                  : vkAllocateMemory(m.device, &alloc, nullptr, &a.memory);
   if (r != VK_SUCCESS) {
     vkDestroyBuffer(m.device, a.buffer, nullptr);
     if (r == VK_ERROR_OUT_OF_DEVICE_MEMORY || r == VK_ERROR_OUT_OF_HOST_MEMORY)
-      throw DeviceError("buffer '" + name + "': out of memory allocating " + std::to_string(req.size) + " bytes (" +
+      throw DeviceLimitError("buffer '" + name + "': out of memory allocating " + std::to_string(req.size) + " bytes (" +
                         detail::result_name(r) + "); nf_gpu holds " + std::to_string(m.allocated_bytes.load()) +
-                        " bytes already");
+                        " bytes already, the device " + std::to_string(budget) + " in all");
     NF_VK_CHECK(r);
   }
   a.bytes = req.size;
@@ -112,7 +118,7 @@ RawBuffer::RawBuffer(Context& context, std::uint64_t bytes, std::string name)
   Context::Impl& m = context.impl();
   const DeviceLimits& lim = m.info.limits;
   if (bytes > lim.max_allocation_size)
-    throw DeviceError("buffer '" + name_ + "' needs " + std::to_string(bytes) + " bytes but device '" + m.info.name +
+    throw DeviceLimitError("buffer '" + name_ + "' needs " + std::to_string(bytes) + " bytes but device '" + m.info.name +
                       "' allows at most " + std::to_string(lim.max_allocation_size) +
                       " per allocation; split the data or lower its size");
   // Mapped device memory where the tuning asks for it (lavapipe, integrated GPUs), else device-local.

@@ -15,7 +15,7 @@ void compact(Stream& stream, BufferRange flags, BufferRange out, BufferRange cou
   Context& context = stream.context();
   const std::uint64_t n = flags.size / 4;
   if (n > max_binding_elements(context, 4))
-    throw DeviceError("compact: " + std::to_string(n) + " elements exceed one binding on '" + context.info().name +
+    throw DeviceLimitError("compact: " + std::to_string(n) + " elements exceed one binding on '" + context.info().name +
                       "' (maxStorageBufferRange " + std::to_string(context.info().limits.max_storage_buffer_range) +
                       " bytes); compact the array in parts");
   if (out.size < flags.size) throw InternalError("compact: output smaller than the flags");

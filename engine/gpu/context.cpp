@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cstdlib>
 #include <cstring>
+#include <tuple>
 
 #include "engine/core/error.hpp"
 #include "engine/core/text.hpp"
@@ -145,6 +146,14 @@ ContextOptions ContextOptions::from_env() {
       throw InputError(std::string("NF_SHARED_MEMORY is '") + v + "'; it must be a byte count of at least 16384");
     o.shared_memory_cap = std::uint32_t(bytes);
   }
+  for (auto [name, field, scale] : {std::tuple{"NF_FAULT_DEVICE_LOST", &o.fault_device_lost_at, 1ull},
+                                    {"NF_FAULT_DEVICE_MEMORY_MB", &o.fault_memory_bytes, 1ull << 20}})
+    if (const char* v = std::getenv(name); v && *v) {
+      char* end = nullptr;
+      const unsigned long long n = std::strtoull(v, &end, 10);
+      if (*end != '\0' || n == 0 || n > (1ull << 40)) throw InputError(std::string(name) + " is '" + v + "'; it must be a positive integer");
+      *field = n * scale;
+    }
   return o;
 }
 

@@ -22,6 +22,9 @@ struct ContextOptions {
   bool force_staging = false;          // NF_FORCE_STAGING=1: no mapped device memory, copy via staging
   bool no_shared_float_atomics = false;  // NF_NO_SHARED_FLOAT_ATOMICS=1: as if the device lacked them
   std::uint32_t shared_memory_cap = 0;   // NF_SHARED_MEMORY=<bytes>: report at most this much shared memory
+  // Fault injection, for the tests of the failure paths on any device:
+  std::uint64_t fault_device_lost_at = 0;  // NF_FAULT_DEVICE_LOST=<n>: the n-th submit and later ones lose the device
+  std::uint64_t fault_memory_bytes = 0;    // NF_FAULT_DEVICE_MEMORY_MB=<m>: the device holds only m MiB
   static ContextOptions from_env();
 };
 

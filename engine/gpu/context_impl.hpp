@@ -68,6 +68,9 @@ struct Context::Impl {
   mutable std::mutex pass_mutex;
   std::map<std::string, PassTotal> pass_totals;
 
+  std::atomic<std::uint64_t> submits{0};
+  std::atomic<bool> device_lost{false};  // after VK_ERROR_DEVICE_LOST nothing more is submitted
+
   std::atomic<std::uint64_t> allocated_bytes{0};
   std::atomic<std::uint64_t> peak_bytes{0};
 

@@ -28,7 +28,7 @@ void radix_sort(Stream& stream, BufferRange keys, BufferRange values, std::uint3
   if (key_bits < 1 || key_bits > 32) throw InternalError("radix_sort: key_bits must be 1..32");
   if (values.size && values.size != keys.size) throw InternalError("radix_sort: keys and values differ in count");
   if (n > max_binding_elements(context, 4))
-    throw DeviceError("radix_sort: " + std::to_string(n) + " keys exceed one binding on '" + context.info().name +
+    throw DeviceLimitError("radix_sort: " + std::to_string(n) + " keys exceed one binding on '" + context.info().name +
                       "' (maxStorageBufferRange " + std::to_string(context.info().limits.max_storage_buffer_range) +
                       " bytes); sort in parts or use a device with a larger range");
   if (n <= 1) return;

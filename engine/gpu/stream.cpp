@@ -55,6 +55,7 @@ struct Stream::Impl {
   // Texel-buffer views of this recording, one per (buffer, offset, size); freed once it completed.
   std::map<std::tuple<VkBuffer, std::uint64_t, std::uint64_t>, VkBufferView> views;
   std::uint32_t dispatches = 0;
+  std::vector<std::string> kernels;  // this recording's kernels in order (repeats folded), for errors
   bool in_flight = false;  // submitted and not yet known complete
   bool recording = false;
 
@@ -71,6 +72,21 @@ struct Stream::Impl {
     pending.clear();
     bound_pipeline = VK_NULL_HANDLE;
     dispatches = 0;
+    kernels.clear();
+  }
+
+  // What this recording ran, for a device error: its passes and its last kernels.
+  std::string running() const {
+    std::string out;
+    for (const OpenPass& p : passes) out += (out.empty() ? "pass '" : ", pass '") + p.name + "'";
+    if (!kernels.empty()) {
+      out += out.empty() ? "kernels " : " (kernels ";
+      const std::size_t first = kernels.size() > 6 ? kernels.size() - 6 : 0;
+      if (first) out += "..., ";
+      for (std::size_t k = first; k < kernels.size(); ++k) out += (k > first ? ", " : "") + kernels[k];
+      if (!passes.empty()) out += ")";
+    }
+    return out.empty() ? "no recorded work" : out;
   }
 
   void full_barrier() {
@@ -210,7 +226,7 @@ void Stream::record_dispatch(const Kernel& kernel, const BufferRange* bindings, 
   if (groups[0] == 0 || groups[1] == 0 || groups[2] == 0) return;  // nothing to do
   for (int axis = 0; axis < 3; ++axis)
     if (groups[axis] > lim.max_workgroup_count[axis])
-      throw DeviceError("kernel '" + kernel.name() + "': " + std::to_string(groups[axis]) + " workgroups on axis " +
+      throw DeviceLimitError("kernel '" + kernel.name() + "': " + std::to_string(groups[axis]) + " workgroups on axis " +
                         std::to_string(axis) + " exceed the device limit " +
                         std::to_string(lim.max_workgroup_count[axis]));
 
@@ -234,7 +250,7 @@ void Stream::record_dispatch(const Kernel& kernel, const BufferRange* bindings, 
       if (r.size % kTexelBytes)
         throw InternalError(what + " spans " + std::to_string(r.size) + " bytes, not a whole number of vec4 texels");
       if (r.size / kTexelBytes > lim.max_texel_buffer_elements)
-        throw DeviceError(what + " spans " + std::to_string(r.size / kTexelBytes) +
+        throw DeviceLimitError(what + " spans " + std::to_string(r.size / kTexelBytes) +
                           " texels, more than the device's maxTexelBufferElements " +
                           std::to_string(lim.max_texel_buffer_elements) + "; process it in chunks");
       if (lim.min_texel_buffer_offset_alignment && r.offset % lim.min_texel_buffer_offset_alignment)
@@ -248,7 +264,7 @@ void Stream::record_dispatch(const Kernel& kernel, const BufferRange* bindings, 
       const std::uint64_t alignment =
           uniform ? lim.min_uniform_buffer_offset_alignment : lim.min_storage_buffer_offset_alignment;
       if (r.size > max_range)
-        throw DeviceError(what + " spans " + std::to_string(r.size) + " bytes, more than the device's " +
+        throw DeviceLimitError(what + " spans " + std::to_string(r.size) + " bytes, more than the device's " +
                           (uniform ? "maxUniformBufferRange " : "maxStorageBufferRange ") + std::to_string(max_range) +
                           "; process it in chunks");
       if (r.offset % alignment)
@@ -294,6 +310,7 @@ void Stream::record_dispatch(const Kernel& kernel, const BufferRange* bindings, 
   if (push_size) vkCmdPushConstants(s.cmd, m.pipeline_layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, std::uint32_t(push_size), push);
   vkCmdDispatch(s.cmd, std::uint32_t(groups[0]), std::uint32_t(groups[1]), std::uint32_t(groups[2]));
   ++s.dispatches;
+  if (s.kernels.empty() || s.kernels.back() != kernel.name()) s.kernels.push_back(kernel.name());
 }
 
 void Stream::copy(BufferRange source, BufferRange destination) {
@@ -371,13 +388,25 @@ void Stream::submit_and_wait() {
   VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
   submit.commandBufferCount = 1;
   submit.pCommandBuffers = &s.cmd;
+  // A lost device (or NF_FAULT_DEVICE_LOST's pretend one, from its n-th submit on) is reported with
+  // the passes and kernels that were running; a device that never answers counts as lost.
+  const std::uint64_t submit_number = ++m.submits;
+  const bool fault = m.options.fault_device_lost_at && submit_number >= m.options.fault_device_lost_at;
+  const auto lost = [&](const std::string& how) {
+    m.device_lost = true;
+    return DeviceLostError("the GPU device was lost (" + how + ") while running " + s.running() + " on '" + m.info.name + "'");
+  };
+  if (m.device_lost) throw lost("earlier in this run");
   {
     std::lock_guard lock(m.queue_mutex);
-    NF_VK_CHECK(vkQueueSubmit(m.queue, 1, &submit, s.fence));
+    const VkResult submitted = fault ? VK_ERROR_DEVICE_LOST : vkQueueSubmit(m.queue, 1, &submit, s.fence);
+    if (submitted == VK_ERROR_DEVICE_LOST) throw lost(fault ? "VK_ERROR_DEVICE_LOST, injected by NF_FAULT_DEVICE_LOST" : "VK_ERROR_DEVICE_LOST");
+    NF_VK_CHECK(submitted);
   }
   s.in_flight = true;
   const VkResult waited = vkWaitForFences(m.device, 1, &s.fence, VK_TRUE, kWaitTimeoutNs);
-  if (waited == VK_TIMEOUT) throw DeviceError("GPU work did not finish within 600 s (hung kernel or lost device)");
+  if (waited == VK_TIMEOUT) throw lost("no answer within 600 s: a hung kernel or a driver reset");
+  if (waited == VK_ERROR_DEVICE_LOST) throw lost("VK_ERROR_DEVICE_LOST");
   NF_VK_CHECK(waited);
   s.in_flight = false;
 

@@ -45,10 +45,9 @@ void throw_vk_error(VkResult result, const char* call, const char* file, int lin
   std::string message = std::string(call) + " failed with " + result_name(result) + " at " + file + ":" +
                         std::to_string(line);
   if (result == VK_ERROR_DEVICE_LOST)
-    message += " — the GPU device was lost (driver reset, timeout or a kernel fault); results of this run "
-               "are invalid, restart the command";
-  else if (result == VK_ERROR_OUT_OF_DEVICE_MEMORY || result == VK_ERROR_OUT_OF_HOST_MEMORY)
-    message += " — not enough memory; try a lower --quality or fewer strands";
+    throw DeviceLostError(message + " — the GPU device was lost (driver reset, timeout or a kernel fault)");
+  if (result == VK_ERROR_OUT_OF_DEVICE_MEMORY || result == VK_ERROR_OUT_OF_HOST_MEMORY)
+    throw DeviceLimitError(message + " — not enough memory");
   throw DeviceError(message);
 }
 

@@ -45,6 +45,7 @@ body::BodyModel body_model_of(const BodySettings& settings);
 class BodyStage : public Stage {
  public:
   std::string name() const override { return "body"; }
+  std::vector<std::string> memory_settings() const override { return {"samples"}; }
   std::vector<std::string> depends_on() const override { return {"neus"}; }
   const StageSettings& settings() const override { return body_settings(); }
   std::vector<std::filesystem::path> inputs(const StageContext& context) const override;

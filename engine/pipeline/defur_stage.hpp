@@ -35,6 +35,7 @@ const SettingsSchema<DefurSettings>& defur_settings();
 class DefurStage : public Stage {
  public:
   std::string name() const override { return "defur"; }
+  std::vector<std::string> memory_settings() const override { return {"resolution", "sdf_resolution", "faces"}; }
   std::vector<std::string> depends_on() const override { return {"body", "knowledge"}; }
   const StageSettings& settings() const override { return defur_settings(); }
   std::vector<std::filesystem::path> inputs(const StageContext& context) const override;

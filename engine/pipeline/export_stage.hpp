@@ -28,6 +28,7 @@ exporter::ExportFrame read_export_frame(const ExportOutputs& outputs);
 class ExportStage : public Stage {
  public:
   std::string name() const override { return "export"; }
+  std::vector<std::string> memory_settings() const override { return {"preview_size", "preview_strands"}; }
   std::vector<std::string> depends_on() const override { return {"fur"}; }
   const StageSettings& settings() const override { return export_settings(); }
   std::vector<std::filesystem::path> inputs(const StageContext& context) const override;

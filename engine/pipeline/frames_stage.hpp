@@ -26,6 +26,7 @@ const SettingsSchema<FramesSettings>& frames_settings();
 class FramesStage : public Stage {
  public:
   std::string name() const override { return "frames"; }
+  std::vector<std::string> memory_settings() const override { return {"roots"}; }
   std::vector<std::string> depends_on() const override { return {"defur"}; }
   const StageSettings& settings() const override { return frames_settings(); }
   std::vector<std::filesystem::path> inputs(const StageContext& context) const override;

@@ -44,6 +44,7 @@ const SettingsSchema<FurSettings>& fur_settings();
 class FurStage : public Stage {
  public:
   std::string name() const override { return "fur"; }
+  std::vector<std::string> memory_settings() const override { return {"batch", "resolution", "chamfer_queries", "strands", "metric_strands"}; }
   std::vector<std::string> depends_on() const override { return {"frames"}; }
   const StageSettings& settings() const override { return fur_settings(); }
   std::vector<std::filesystem::path> inputs(const StageContext& context) const override;

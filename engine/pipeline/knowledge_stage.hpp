@@ -48,6 +48,7 @@ std::array<glm::vec3, body::kRegionCount> read_directions_world(const KnowledgeO
 class KnowledgeStage : public Stage {
  public:
   std::string name() const override { return "knowledge"; }
+  std::vector<std::string> memory_settings() const override { return {"image_size"}; }
   std::vector<std::string> depends_on() const override { return {"body"}; }
   const StageSettings& settings() const override { return knowledge_settings(); }
   // No source named: stop before the first stage runs, not after an hour of neus.

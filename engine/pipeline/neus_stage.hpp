@@ -24,6 +24,7 @@ const SettingsSchema<neus::NeusQuality>& neus_settings();
 class NeusStage : public Stage {
  public:
   std::string name() const override { return "neus"; }
+  std::vector<std::string> memory_settings() const override { return {"rays", "samples_per_ray", "mesh_resolution", "hull_resolution"}; }
   const StageSettings& settings() const override { return neus_settings(); }
   std::vector<std::filesystem::path> inputs(const StageContext& context) const override;
   json parameters(const StageContext& context) const override;

@@ -40,6 +40,9 @@ class Stage {
   virtual void check_needed_settings(const std::string& quality, const json& overrides) const {
     (void)quality, (void)overrides;
   }
+  // The settings that set how much device and host memory the stage needs, the most effective
+  // first: an out-of-memory error in the stage names them with their values.
+  virtual std::vector<std::string> memory_settings() const { return {}; }
   // Files read (scene files, or earlier stages' outputs under WORK); their content is hashed.
   // A missing file under WORK/<stage>/ is reported as "run stage <stage>".
   virtual std::vector<std::filesystem::path> inputs(const StageContext& context) const = 0;

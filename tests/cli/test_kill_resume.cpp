@@ -24,14 +24,6 @@ using namespace nf::test;
 
 namespace {
 
-// Every file under `dir` (relative path -> bytes), skipping what `skip` names.
-std::map<std::string, std::string> snapshot(const fs::path& dir) {
-  std::map<std::string, std::string> files;
-  for (const auto& e : fs::recursive_directory_iterator(dir))
-    if (e.is_regular_file()) files[fs::relative(e.path(), dir).string()] = slurp(e.path());
-  return files;
-}
-
 std::set<std::string> file_names(const fs::path& dir) {
   std::set<std::string> names;
   for (const auto& e : fs::recursive_directory_iterator(dir))
