@@ -102,6 +102,15 @@ std::pair<std::uint32_t, std::uint32_t> image_size(const std::filesystem::path& 
   return {std::uint32_t(w), std::uint32_t(h)};
 }
 
+std::uint32_t image_channels(const std::filesystem::path& path) {
+  const File file = open_image(path);
+  const Kind kind = kind_of(file.get(), path.string());
+  int w = 0, h = 0, channels = 0;
+  if (!stbi_info_from_file(file.get(), &w, &h, &channels))
+    throw InputError(path.string() + ": truncated or corrupt " + (kind == Kind::Png ? "PNG" : "JPEG") + " header");
+  return std::uint32_t(channels);
+}
+
 void require_complete_image(const std::filesystem::path& path) {
   const std::string where = path.string();
   const File file = open_image(path);

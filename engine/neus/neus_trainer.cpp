@@ -13,6 +13,7 @@
 #include "engine/geometry/point_index.hpp"
 #include "engine/gpu/context.hpp"
 #include "engine/io/image.hpp"
+#include "engine/io/mask_agreement.hpp"
 #include "engine/nn/weights_io.hpp"
 
 namespace nf::neus {
@@ -96,6 +97,36 @@ NeusStepReport step_report_from_json(const json& j) {
   return r;
 }
 
+namespace {
+
+// Masks whose edges do not follow their photos' outlines (io/mask_agreement.hpp): all of them
+// (another animal's, or a shifted order) or one far below the others (a mask of another photo). A
+// warning only: a photo whose animal blends into its background has weak edges of its own.
+void warn_about_foreign_masks(const io::Scene& scene, const NeusTrainingData& d, const std::vector<std::uint8_t>& usable) {
+  std::vector<double> peak(scene.cameras.size(), std::nan(""));
+  std::vector<double> known;
+  for (std::size_t c = 0; c < scene.cameras.size(); ++c) {
+    if (!usable[c]) continue;
+    peak[c] = io::mask_edge_peak(d.rgb[c], d.masks[c], scene.cameras[c].width, scene.cameras[c].height);
+    if (std::isfinite(peak[c])) known.push_back(peak[c]);
+  }
+  if (known.empty()) return;
+  std::nth_element(known.begin(), known.begin() + std::ptrdiff_t(known.size() / 2), known.end());
+  const double median = known[known.size() / 2];
+  constexpr double kFollows = 1.8, kForeign = 1.3;
+  if (median < kFollows)
+    log::warn(scene.root.string(), ": the masks' edges do not follow the photos' outlines (median edge peak ", median,
+              "; a photo's own mask scores 2.5 or more); check that each mask belongs to its photo (same animal, same order)");
+  else
+    for (std::size_t c = 0; c < scene.cameras.size(); ++c)
+      if (std::isfinite(peak[c]) && peak[c] < kForeign)
+        log::warn(scene.root.string(), ": camera '", scene.cameras[c].name, "': the edge of mask ", scene.cameras[c].mask.string(),
+                  " does not follow its photo's outline (edge peak ", peak[c], ", the other views' median ", median,
+                  "); is it the mask of another photo?");
+}
+
+}  // namespace
+
 NeusTrainingData load_neus_training_data(const io::Scene& scene, const VisualHullOptions& hull_options,
                                          int hold_out_every) {
   NeusTrainingData d;
@@ -143,6 +174,7 @@ NeusTrainingData load_neus_training_data(const io::Scene& scene, const VisualHul
       usable[c] = 1;
     }
   });
+  warn_about_foreign_masks(scene, d, usable);
   for (std::size_t c = 0; c < n; ++c) {
     if (!usable[c]) {
       log::warn(scene.root.string(), ": camera '", scene.cameras[c].name,
@@ -529,49 +561,51 @@ void NeusTrainer::save_checkpoint(const std::filesystem::path& path) const {
   nn::save_weights(path, file);
 }
 
-bool NeusTrainer::load_checkpoint(const std::filesystem::path& path) {
-  const nn::WeightsFile file = nn::load_weights(path);
-  const json& c = file.config;
-  if (!c.contains("kind") || c["kind"] != "neus checkpoint")
-    throw InputError(path.string() + ": not a neus checkpoint");
-  if (c.value("version", 0u) != kCheckpointVersion || c.value("field", json()) != to_json(field_config_) ||
-      c.value("options", json()) != to_json(options_))
-    return false;
-  // Everything is read and checked before anything is applied.
-  std::vector<std::pair<std::string, std::vector<float>>> params;
+NeusCheckpointState parse_neus_checkpoint(const nn::WeightsFile& file, const std::filesystem::path& path, bool has_table) {
+  NeusCheckpointState s;
   for (const std::string name : {"hash_table", "sdf", "colour"})
-    if (name != "hash_table" || field_->has_table()) params.emplace_back(name, file.tensor(name, path).values);
+    if (name != "hash_table" || has_table) s.params.emplace_back(name, file.tensor(name, path).values);
   const auto adam_state = [&](const std::string& name) { return nn::state_from_tensors(file, name, path); };
-  const nn::Adam::State table_state = adam_table_ ? adam_state("adam.hash_table") : nn::Adam::State{};
-  const nn::Adam::State sdf_state = adam_state("adam.sdf"), colour_state = adam_state("adam.colour");
-  const std::vector<float>& occ = file.tensor("occupancy", path).values;
-  if (occ.size() != occupancy_.occupied.size())
-    throw InputError(path.string() + ": the occupancy grid has " + std::to_string(occ.size()) + " cells, the scene's " +
-                     std::to_string(occupancy_.occupied.size()));
-  NeusStepReport last;
-  std::vector<NeusStepReport> history;
-  std::uint32_t step = 0, variance_t = 0;
-  double seconds = 0, variance = 0, variance_m = 0, variance_v = 0;
+  if (has_table) s.table_adam = adam_state("adam.hash_table");
+  s.sdf_adam = adam_state("adam.sdf"), s.colour_adam = adam_state("adam.colour");
+  s.occupancy = file.tensor("occupancy", path).values;
   try {
-    step = c.at("step").get<std::uint32_t>();
-    seconds = c.at("seconds").get<double>();
-    variance = c.at("variance").get<double>();
-    variance_m = c.at("variance_adam").at(0).get<double>();
-    variance_v = c.at("variance_adam").at(1).get<double>();
-    variance_t = c.at("variance_adam").at(2).get<std::uint32_t>();
-    last = step_report_from_json(c.at("last"));
-    for (const json& r : c.at("history")) history.push_back(step_report_from_json(r));
+    const json& c = file.config;
+    s.step = c.at("step").get<std::uint32_t>();
+    s.seconds = c.at("seconds").get<double>();
+    s.variance = c.at("variance").get<double>();
+    s.variance_m = c.at("variance_adam").at(0).get<double>();
+    s.variance_v = c.at("variance_adam").at(1).get<double>();
+    s.variance_t = c.at("variance_adam").at(2).get<std::uint32_t>();
+    s.last = step_report_from_json(c.at("last"));
+    for (const json& r : c.at("history")) s.history.push_back(step_report_from_json(r));
   } catch (const json::exception& e) {
     throw InputError(path.string() + ": " + e.what());
   }
-  field_->load_parameters(params);
-  if (adam_table_) adam_table_->load_state(table_state);
-  adam_sdf_->load_state(sdf_state);
-  adam_colour_->load_state(colour_state);
-  for (std::size_t i = 0; i < occ.size(); ++i) occupancy_.occupied[i] = occ[i] != 0.f;
-  step_ = step, seconds_ = seconds, variance_ = variance;
-  variance_m_ = variance_m, variance_v_ = variance_v, variance_t_ = variance_t;
-  last_ = last, history_ = std::move(history);
+  return s;
+}
+
+bool NeusTrainer::load_checkpoint(const std::filesystem::path& path) {
+  const nn::WeightsFile file = nn::load_weights(path);
+  const json& c = file.config;
+  if (!c.is_object() || c.value("kind", json()) != "neus checkpoint")
+    throw InputError(path.string() + ": not a neus checkpoint");
+  if (c.value("version", json()) != kCheckpointVersion || c.value("field", json()) != to_json(field_config_) ||
+      c.value("options", json()) != to_json(options_))
+    return false;
+  // Everything is read and checked before anything is applied.
+  NeusCheckpointState s = parse_neus_checkpoint(file, path, adam_table_ != nullptr);
+  if (s.occupancy.size() != occupancy_.occupied.size())
+    throw InputError(path.string() + ": the occupancy grid has " + std::to_string(s.occupancy.size()) + " cells, the scene's " +
+                     std::to_string(occupancy_.occupied.size()));
+  field_->load_parameters(s.params);
+  if (adam_table_) adam_table_->load_state(s.table_adam);
+  adam_sdf_->load_state(s.sdf_adam);
+  adam_colour_->load_state(s.colour_adam);
+  for (std::size_t i = 0; i < s.occupancy.size(); ++i) occupancy_.occupied[i] = s.occupancy[i] != 0.f;
+  step_ = s.step, seconds_ = s.seconds, variance_ = s.variance;
+  variance_m_ = s.variance_m, variance_v_ = s.variance_v, variance_t_ = s.variance_t;
+  last_ = s.last, history_ = std::move(s.history);
   return true;
 }
 

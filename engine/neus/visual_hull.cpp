@@ -182,6 +182,40 @@ std::vector<std::uint8_t> carve(const std::vector<View>& views, glm::dvec3 lo, g
                    "of them); the camera that carves most is " + describe(most) + "; check the poses and masks");
 }
 
+// A camera cannot sit inside the animal: a cell around its centre that every other camera seeing
+// it keeps (in its mask, in front of it) means a wrong pose (a world-to-camera matrix given as
+// camera-to-world, a translation in other units) that the carve alone would silently accept.
+void check_cameras_outside(const io::Scene& scene, const std::string& source, const std::vector<View>& views,
+                           glm::dvec3 cell, int min_views) {
+  const CellTest test{views, glm::dvec3(0.0), cell, min_views};
+  for (std::size_t ci = 0; ci < scene.cameras.size(); ++ci) {
+    const glm::dvec3 centre(scene.cameras[ci].camera_to_world[3]);
+    int seen = 0;
+    bool carved = false;
+    for (const View& v : views) {
+      if (v.camera == ci) continue;
+      bool s = false;
+      if (test.carves(v, centre - 0.5 * cell, s)) {
+        carved = true;
+        break;
+      }
+      seen += s;
+    }
+    if (carved || seen < std::max(2, min_views)) continue;
+    // Its own mask covering the whole image agrees (a camera inside sees only the object): the carve
+    // copes with that (the camera carves nothing). A mask of an outline does not: the data lie.
+    const auto own = std::find_if(views.begin(), views.end(), [&](const View& v) { return v.camera == ci; });
+    const std::string where = source + ": camera '" + scene.cameras[ci].name + "' sits inside the animal: its position lies in the masks of all " +
+                              std::to_string(seen) + " other cameras that see it";
+    if (own != views.end() && own->set_pixels == std::uint64_t(own->width) * std::uint64_t(own->height)) {
+      log::warn(where, "; its own mask covers its whole image, so it is kept, but check its pose");
+      continue;
+    }
+    throw InputError(where + ". Its pose is wrong (the transform is camera-to-world, OpenGL axes: x right, y up, looking down " +
+                     "-z; translations in the scene's units) or the masks belong to other photos");
+  }
+}
+
 double longest(const glm::dvec3& e) { return std::max({e.x, e.y, e.z}); }
 
 // A grid of cubic cells covering [box_lo, box_hi] with `resolution` cells along its longest axis,
@@ -301,6 +335,10 @@ OccupancyGrid carve_visual_hull(const io::Scene& scene, const VisualHullOptions&
     }
     v.set_pixels = v.sat.back();
   });
+  if (std::all_of(views.begin(), views.end(), [](const View& v) { return v.set_pixels == 0; }))
+    throw InputError(source + ": every mask is empty (" + scene.cameras[views[0].camera].mask.parent_path().string() +
+                     "/ and the others): nothing marks the animal. A mask is white (or opaque alpha) on the animal and "
+                     "black elsewhere; check that the masks are not inverted, blank or written with another bit depth");
   const int min_views = std::min(options.min_views, int(views.size()));
   const auto partial = std::count_if(views.begin(), views.end(), [](const View& v) { return !v.full_view; });
   if (partial > 0)
@@ -350,6 +388,7 @@ OccupancyGrid carve_visual_hull(const io::Scene& scene, const VisualHullOptions&
   grid.lo = lo, grid.dims = dims, grid.hi = lo + glm::dvec3(dims) * cell;
   grid.occupied = carve(views, lo, cell, dims, min_views);
   if (!any_set(grid.occupied)) explain_empty(scene, source, views, lo, cell, dims, min_views);
+  check_cameras_outside(scene, source, views, cell, min_views);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   log::info(source, ": visual hull from ", views.size(), " masks: ", dims.x, "x", dims.y, "x", dims.z, " cells, ",
             100.0 * grid.occupied_fraction(), "% occupied, ", seconds, " s");

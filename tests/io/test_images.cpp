@@ -11,6 +11,7 @@
 #include "engine/core/error.hpp"
 #include "engine/io/image.hpp"
 #include "engine/io/image_size.hpp"
+#include "engine/io/mask_agreement.hpp"
 
 using namespace nf;
 using namespace nf::io;
@@ -118,4 +119,28 @@ TEST_CASE("image_size reads PNG and JPEG headers; require_complete_image finds f
   CHECK_THROWS_WITH_AS(require_complete_image(png), doctest::Contains("not a PNG or JPEG"), InputError);
   fs::remove(png);
   fs::remove(jpg);
+}
+
+TEST_CASE("a mask's edge follows its own photo's outline, not another photo's") {
+  // A bright disc on a dark, slightly noisy background: its own mask's edge sits on the step; a mask
+  // shifted by 12 pixels (another photo's) cuts through flat disc and flat background.
+  const std::uint32_t w = 96, h = 80;
+  std::vector<std::uint8_t> rgb(std::size_t(w) * h * 3), own(std::size_t(w) * h), shifted(std::size_t(w) * h);
+  std::uint32_t noise = 12345;
+  for (std::uint32_t y = 0; y < h; ++y)
+    for (std::uint32_t x = 0; x < w; ++x) {
+      const std::size_t p = std::size_t(y) * w + x;
+      const auto inside = [&](double cx) { return std::hypot(double(x) - cx, double(y) - 40.0) < 25.0; };
+      noise = noise * 1664525u + 1013904223u;
+      for (int k = 0; k < 3; ++k) rgb[3 * p + k] = std::uint8_t((inside(48) ? 200 : 30) + (noise >> 29));
+      own[p] = inside(48), shifted[p] = inside(60);
+    }
+  const double own_contrast = mask_edge_contrast(rgb, own, w, h), shifted_contrast = mask_edge_contrast(rgb, shifted, w, h);
+  CHECK(own_contrast > 5.0);
+  CHECK(own_contrast > 2.5 * shifted_contrast);
+  // Moving the shifted mask back by 12 pixels finds the photo's outline again.
+  CHECK(mask_edge_contrast(rgb, shifted, w, h, -12, 0) == doctest::Approx(own_contrast));
+  CHECK(mask_edge_peak(rgb, own, w, h) > 2.0);
+  CHECK(mask_edge_peak(rgb, shifted, w, h) < 1.3);
+  CHECK(std::isnan(mask_edge_contrast(rgb, std::vector<std::uint8_t>(std::size_t(w) * h, 1), w, h)));  // no edge
 }
