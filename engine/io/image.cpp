@@ -79,6 +79,15 @@ Image read_image(const std::filesystem::path& path) {
   int w = 0, h = 0, c = 0;
   if (!stbi_info_from_memory(data, size, &w, &h, &c))
     throw InputError(path.string() + ": not a readable PNG or JPEG (" + stbi_failure_reason() + ")");
+  // A header may declare any size, and decoding allocates it before reading the pixels: refuse what
+  // no photo is, and what the file cannot hold (deflate packs at most about 1032:1, and a 1-bit
+  // PNG 8 pixels a byte before that; JPEG far less).
+  const std::uint64_t declared = std::uint64_t(w) * std::uint64_t(h);
+  const std::string size_text = std::to_string(w) + " x " + std::to_string(h);
+  if (declared > kMaxImagePixels)
+    throw InputError(path.string() + ": declares " + size_text + " pixels, more than nf_gpu reads (" + std::to_string(kMaxImagePixels) + ")");
+  if (declared * std::uint64_t(std::max(c, 1)) > 8800 * std::uint64_t(bytes.size()) + 65536)
+    throw InputError(path.string() + ": declares " + size_text + " pixels in " + std::to_string(bytes.size()) + " bytes: truncated or not an image");
   Image img;
   if (stbi_is_16_bit_from_memory(data, size)) {
     std::unique_ptr<stbi_us, void (*)(void*)> px(stbi_load_16_from_memory(data, size, &w, &h, &c, 0), stbi_image_free);

@@ -18,7 +18,11 @@ struct Image {
   }
 };
 
-// Throws InputError naming the file and the reason (missing, truncated, unsupported).
+// The most pixels an image may declare (16384 x 16384): beyond it, and beyond what its bytes can
+// hold, read_image refuses before decoding.
+inline constexpr std::uint64_t kMaxImagePixels = std::uint64_t(1) << 28;
+
+// Throws InputError naming the file and the reason (missing, truncated, unsupported, too large).
 Image read_image(const std::filesystem::path& path);
 void write_png(const std::filesystem::path& path, const Image& image);  // 8 bit, values clamped to [0, 1]
 // The bytes of a PNG or JPEG file (8 bit, values clamped to [0, 1]; JPEG: 1 or 3 channels).

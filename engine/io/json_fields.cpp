@@ -6,6 +6,7 @@
 #include <iterator>
 
 #include "engine/core/error.hpp"
+#include "engine/core/text.hpp"
 
 namespace nf::io {
 
@@ -66,7 +67,8 @@ json read_json_file(const std::filesystem::path& path) {
 std::string describe_json(const json& value) {
   if (value.is_string()) {
     const auto& s = value.get_ref<const std::string&>();
-    return json(s.size() > 40 ? s.substr(0, 40) + "..." : s).dump();
+    // Cut at a character boundary, and invalid UTF-8 shown as U+FFFD: the text ends up in a message.
+    return json(shorten(s, 40)).dump(-1, ' ', false, json::error_handler_t::replace);
   }
   if (value.is_object()) return "an object";
   if (value.is_array()) return "an array";

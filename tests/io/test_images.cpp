@@ -6,7 +6,9 @@
 
 #include <cmath>
 #include <filesystem>
+#include <cstdint>
 #include <fstream>
+#include <vector>
 
 #include "engine/core/error.hpp"
 #include "engine/io/image.hpp"
@@ -78,6 +80,21 @@ TEST_CASE("broken images are refused with the file named") {
   CHECK_THROWS_WITH_AS(read_image(fs::temp_directory_path() / "nf_no_such.png"), doctest::Contains("cannot open"), InputError);
   fs::remove(path);
   fs::remove(fs::temp_directory_path() / "nf_test_broken.exr");
+}
+
+TEST_CASE("an image header declaring more pixels than its file holds is refused before decoding") {
+  // The fuzzer's finding: 14 bytes of PGM header declaring 3,288,525 x 228 pixels made the decoder
+  // allocate 0.75 GB and read_image 3 GB.
+  const fs::path path = fs::temp_directory_path() / "nf_test_huge_header.png";
+  std::ofstream(path, std::ios::binary) << "P53288525\r228\x86";
+  CHECK_THROWS_WITH_AS(read_image(path), doctest::Contains("declares 3288525 x 228 pixels, more than nf_gpu reads"), InputError);
+  std::ofstream(path, std::ios::binary) << "P5 8000 8000 255 ";
+  CHECK_THROWS_WITH_AS(read_image(path), doctest::Contains("declares 8000 x 8000 pixels in 17 bytes: truncated"), InputError);
+  // A uniform mask compresses far (here 100:1) and is still read.
+  std::vector<std::uint8_t> black(std::size_t(2000) * 1500, 0);
+  REQUIRE(stbi_write_png(path.c_str(), 2000, 1500, 1, black.data(), 2000));
+  CHECK(read_image(path).width == 2000);
+  fs::remove(path);
 }
 
 TEST_CASE("image_size reads PNG and JPEG headers; require_complete_image finds files cut short") {

@@ -197,6 +197,10 @@ TEST_CASE("transforms.json: a value of the wrong type is named by its path, not 
   CHECK(m.find("json.exception") == std::string::npos);
   m = message(R"({"fl_x": 300, "w": "64", "h": 48, "frames": [{)" + good + "}]}");
   CHECK(m.find("w: expected a number, got \"64\"") != std::string::npos);
+  // A long text is cut at a character boundary, never inside one (the fuzzer's finding: cut inside
+  // a two-byte character, the message itself could not be written).
+  m = message(R"({"fl_x": 300, "w": "abcdefghijklmnopqrstuvwxyz0123456789abcééé", "h": 48, "frames": [{)" + good + "}]}");
+  CHECK(m.find("w: expected a number, got \"abcdefghijklmnopqrstuvwxyz0123456789abc...\"") != std::string::npos);
   m = message(R"({"fl_x": 300, "w": 64, "h": 48, "frames": [{"file_path": 7, "transform_matrix": []}]})");
   CHECK(m.find("frames[0].transform_matrix: expected 3 or 4 rows") != std::string::npos);
   m = message(R"({"fl_x": 300, "w": 64, "h": 48, "frames": [{"file_path": 7, "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0]]}]})");
