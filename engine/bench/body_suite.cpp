@@ -1,12 +1,11 @@
 #include "engine/bench/body_suite.hpp"
 
-#include <unistd.h>
-
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
 #include "engine/bench/record.hpp"
+#include "engine/bench/scratch_folder.hpp"
 #include "engine/core/log.hpp"
 #include "engine/pipeline/body_stage.hpp"
 #include "engine/pipeline/knowledge_stage.hpp"
@@ -21,15 +20,8 @@ namespace fs = std::filesystem;
 json run_body_suite(gpu::Context& ctx, const Options& options) {
   // NF_BENCH_BODY_DIR keeps the scenes and WORK folders there: a second run reuses the cached NeuS
   // surfaces and reruns only the body stage (for tuning it). Otherwise a temporary folder, removed.
-  const char* keep = std::getenv("NF_BENCH_BODY_DIR");
-  const fs::path root = keep ? fs::path(keep) : fs::temp_directory_path() / ("nf-bench-body-" + std::to_string(::getpid()));
-  struct Cleanup {
-    fs::path path;
-    ~Cleanup() {
-      std::error_code ec;
-      if (!path.empty()) fs::remove_all(path, ec);
-    }
-  } cleanup{keep ? fs::path() : root};
+  const ScratchFolder scratch("NF_BENCH_BODY_DIR", "nf-bench-body-");
+  const fs::path& root = scratch.path();
   const std::vector<std::string> animals = options.quick ? std::vector<std::string>{"cat"}
                                                          : std::vector<std::string>{"cat", "dog", "lion"};
   const std::vector<unsigned> seeds = options.quick ? std::vector<unsigned>{1} : std::vector<unsigned>{1, 2};

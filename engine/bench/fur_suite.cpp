@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <string>
 #include <random>
 
 #include <glm/glm.hpp>
 
+#include "engine/bench/fur_scene_suite.hpp"
 #include "engine/bench/record.hpp"
 #include "engine/fur/strand_chamfer.hpp"
 #include "engine/fur/strand_geometry.hpp"
@@ -149,6 +152,10 @@ json run_fur_suite(gpu::Context& ctx, const Options& options) {
                                   {{"queries_per_second", double(queries) / t.median()}, {"loss", value.loss},
                                    {"unmatched", value.unmatched}, {"sampled_queries", checked}, {"wrong_nearest", wrong}}));
   }
+  // The stage on whole scenes (tens of minutes; NF_BENCH_FUR_SCENES=0: the kernels only).
+  const char* scenes = std::getenv("NF_BENCH_FUR_SCENES");
+  if (!scenes || std::string(scenes) != "0")
+    for (json& r : run_fur_scene_suite(ctx, options)) records.push_back(std::move(r));
   return records;
 }
 

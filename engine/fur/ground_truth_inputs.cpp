@@ -37,11 +37,11 @@ void set_surface_inputs(FurTrainingData& data, const geometry::Mesh& outer, cons
 GroundTruthInputs ground_truth_inputs(gpu::Context& gpu, const fs::path& scene_dir, const GroundTruthInputOptions& o) {
   const std::optional<io::GroundTruth> gt = io::find_ground_truth(scene_dir);
   if (!gt) throw InputError(scene_dir.string() + ": no ground truth (gt/scene.json); only `nf_gpu synth` scenes have one");
-  const io::Scene scene = io::read_scene(scene_dir);
   GroundTruthInputs in;
-  in.bald = io::read_mesh(gt->bald());
+  in.bald = o.bald ? *o.bald : io::read_mesh(gt->bald());
   in.outer = io::read_mesh(gt->outer());
-  if (in.bald.regions.size() != in.bald.vertex_count()) throw InputError(gt->bald().string() + ": no region per vertex");
+  if (in.bald.regions.size() != in.bald.vertex_count())
+    throw InputError((o.bald ? std::string("the bald body given") : gt->bald().string()) + ": no region per vertex");
   const knowledge::Knowledge know = knowledge::read_knowledge(gt->knowledge());
   glm::mat3 animal_to_world(1.f);
   try {
@@ -61,13 +61,15 @@ GroundTruthInputs ground_truth_inputs(gpu::Context& gpu, const fs::path& scene_d
       directions[std::size_t(r)] = glm::length(d) > 0 ? glm::normalize(d) : d;
     }
   const double cm = gt->cm_per_unit;
-  const defur::VertexFur vertex_fur = defur::vertex_fur(in.bald, know, directions, cm, 20);
+  in.vertex_fur = defur::vertex_fur(in.bald, know, directions, cm, 20);
+  const defur::VertexFur& vertex_fur = in.vertex_fur;
 
   geometry::TangentFieldOptions field_options;
   field_options.smoothing_length = o.smoothing_cm / cm;
   const geometry::TangentField field = geometry::smooth_tangent_field(in.bald, face_growth_guides(in.bald, vertex_fur), field_options);
   FurTrainingData& data = in.data;
-  data.roots = sample_roots(in.bald, {field.tangent, field.normal}, vertex_fur, o.roots, o.seed);
+  in.frames = {field.tangent, field.normal};
+  data.roots = sample_roots(in.bald, in.frames, vertex_fur, o.roots, o.seed);
   data.cm_per_unit = cm;
   data.fur_area = fur_area(in.bald, vertex_fur);
 
@@ -78,7 +80,8 @@ GroundTruthInputs ground_truth_inputs(gpu::Context& gpu, const fs::path& scene_d
   data.bald_sdf = {sdf.grid, sdf.band, sdf.distance};
   set_surface_inputs(data, in.outer, {}, o.seed);
 
-  for (std::uint32_t v = 0; v < scene.cameras.size(); ++v) {
+  const io::Scene scene = o.make_views ? io::read_scene(scene_dir) : io::Scene{};
+  for (std::uint32_t v = 0; o.make_views && v < scene.cameras.size(); ++v) {
     const bool held = o.hold_out_every > 0 && v % std::uint32_t(o.hold_out_every) == std::uint32_t(o.hold_out_every) - 1;
     (held ? data.held_out : data.train).push_back(make_fur_view(gpu, scene, v, nullptr, in.bald, o.views));
   }

@@ -7,6 +7,7 @@
 // costs by swapping in the truth.
 #include <filesystem>
 
+#include "engine/defur/vertex_fur.hpp"
 #include "engine/fur/fur_trainer.hpp"
 #include "engine/geometry/mesh.hpp"
 
@@ -26,10 +27,16 @@ struct GroundTruthInputOptions {
   // that is wrong in a known way, for tests that the photos correct it.
   double heading_error_deg = 0;
   unsigned seed = 1;
+  // Grow the true knowledge on this body (with its regions) instead of gt/bald.ply: the fur stage's
+  // `truth=knowledge`, which measures what the knowledge's error costs on the pipeline's own M_bald.
+  const geometry::Mesh* bald = nullptr;
+  bool make_views = true;  // the training and held-out views (false: data.train/held_out stay empty)
 };
 
 struct GroundTruthInputs {
   geometry::Mesh bald, outer;
+  defur::VertexFur vertex_fur;  // the true knowledge per vertex of `bald`
+  FaceFrames frames;            // the tangent field of that knowledge on `bald`: more roots can be drawn
   FurTrainingData data;
 };
 

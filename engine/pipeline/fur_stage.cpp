@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <optional>
+#include <sstream>
 
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
@@ -111,6 +114,57 @@ io::Image preview_image(const fur::FurView& v, const std::vector<float>& image) 
 
 json step_json(const fur::FurStepReport& r) { return fur::to_json(r); }
 
+struct HeldOutScores {
+  json views = json::array();
+  double silhouette_iou = 0, orientation_error_deg = 0;  // means over the views
+};
+
+// The field's strands rendered into each held-out view and scored against its targets; `images`
+// (when given) keeps the renderings for the previews; `before_each` may stop the work.
+HeldOutScores score_held_out(fur::FurTrainer& trainer, const std::vector<fur::FurView>& views, const io::Scene& scene, std::uint32_t strands,
+                             unsigned seed, std::vector<std::vector<float>>* images, const std::function<void()>& before_each = {}) {
+  HeldOutScores h;
+  for (const fur::FurView& v : views) {
+    if (before_each) before_each();
+    std::vector<float> image = trainer.render(v, strands, seed);
+    const fur::ViewScore score = fur::score_view(v, image);
+    h.views.push_back({{"camera", scene.cameras[v.camera].name}, {"silhouette_iou", score.silhouette_iou},
+                       {"orientation_error_deg", score.orientation_error_deg}, {"pixels", score.pixels}});
+    h.silhouette_iou += score.silhouette_iou / double(views.size());
+    h.orientation_error_deg += score.orientation_error_deg / double(views.size());
+    if (images) images->push_back(std::move(image));
+  }
+  return h;
+}
+
+// One point of curve.jsonl: training time, the held-out views' scores and, with a ground truth,
+// the groom's F-scores and tips against the truth (metric_strands strands of the field, inferred
+// at a fixed subset of the roots so that the points differ only by the training).
+json curve_point(fur::FurTrainer& trainer, const fur::FurTrainingData& data, const FurSettings& s, const io::Scene& scene,
+                 const metrics::GroomTruth& truth, double cm, std::uint32_t score_strands) {
+  const Stopwatch t;
+  const HeldOutScores held = score_held_out(trainer, data.held_out, scene, score_strands, s.training.seed + 7, nullptr);
+  json p{{"step", trainer.step()},
+         {"seconds", trainer.step() ? trainer.last_report().seconds : 0.0},
+         {"held_out", {{"silhouette_iou", held.silhouette_iou}, {"orientation_error_deg", held.orientation_error_deg}}}};
+  if (trainer.step()) p["loss"] = trainer.last_report().loss;
+  if (truth.strands || truth.outer) {
+    std::vector<std::uint32_t> ids = fur::sample_indices(data.roots.size(), s.metric_strands, s.training.seed + 13);
+    std::sort(ids.begin(), ids.end());
+    std::vector<float> xyz;
+    xyz.reserve(ids.size() * fur::kStrandPoints * 3);
+    trainer.field().infer(data.roots, ids, 65536, [&](std::size_t, std::uint32_t, const std::vector<float>& points, const std::vector<float>&) {
+      xyz.insert(xyz.end(), points.begin(), points.end());
+    });
+    const io::StrandSet groom = io::StrandSet::uniform(std::uint32_t(ids.size()), fur::kStrandPoints, std::move(xyz));
+    const json scores = metrics::groom_scores(metrics::sample_strands(groom, s.metric_strands, s.metric_points, 1), truth, cm);
+    for (const char* key : {"fscore", "tips_to_outer"})
+      if (scores.contains(key)) p[key] = scores[key];
+  }
+  p["scoring_seconds"] = t.seconds();
+  return p;
+}
+
 }  // namespace
 
 FurSettings fur_quality_preset(const std::string& quality) {
@@ -141,9 +195,13 @@ std::vector<fs::path> FurStage::inputs(const StageContext& c) const {
     const fs::path nonbald = d.masks() / (names[v] + ".png");
     if (fs::exists(nonbald)) files.push_back(nonbald);
   }
-  if (const auto gt = io::find_ground_truth(c.scene_dir))
+  if (const auto gt = io::find_ground_truth(c.scene_dir)) {
     for (const fs::path& p : {gt->strands(), gt->outer()})
       if (fs::exists(p)) files.push_back(p);
+    if (settings_of(c).truth != "none")
+      for (const fs::path& p : {gt->bald(), gt->knowledge(), gt->scene_json()})
+        if (fs::exists(p)) files.push_back(p);
+  }
   return files;
 }
 
@@ -160,14 +218,34 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
   json seconds = json::object();
   Stopwatch t;
 
-  const geometry::Mesh bald = io::read_mesh(d.bald());
-  const defur::VertexFur vertex_fur = defur::read_vertex_fur(d.vertex_fur(), bald.vertex_count());
-  const double cm = read_metric_scale(knowledge_outputs(c.work));
+  geometry::Mesh bald = io::read_mesh(d.bald());
+  defur::VertexFur vertex_fur = defur::read_vertex_fur(d.vertex_fur(), bald.vertex_count());
+  double cm = read_metric_scale(knowledge_outputs(c.work));
   const knowledge::Knowledge knowledge = knowledge::read_knowledge(knowledge_outputs(c.work).knowledge());
   fur::FurTrainingData data;
   data.roots = fur::read_roots(f.roots());
+  // `truth`: the earlier stages' results swapped for the scene's ground truth, through the code
+  // those stages run, at the same number of roots.
+  std::optional<fur::GroundTruthInputs> swapped;
+  if (s.truth != "none") {
+    fur::GroundTruthInputOptions gi;
+    gi.roots = std::max<std::uint64_t>(1, data.roots.size()), gi.hold_out_every = s.hold_out_every, gi.seed = s.training.seed;
+    gi.bald = s.truth == "knowledge" ? &bald : nullptr;
+    gi.make_views = false;
+    swapped = fur::ground_truth_inputs(c.gpu, c.scene_dir, gi);
+    cm = swapped->data.cm_per_unit;
+    vertex_fur = swapped->vertex_fur;
+    if (s.truth == "all") {
+      bald = swapped->bald;
+      data = std::move(swapped->data);
+    } else {
+      data.roots = std::move(swapped->data.roots);
+    }
+    log::info("fur: truth=", s.truth, ": the ", s.truth == "all" ? "true bald body, knowledge and roots" : "true knowledge on the pipeline's M_bald",
+              " (", data.roots.size(), " roots, ", cm, " cm per unit)");
+  }
   data.cm_per_unit = cm;
-  write_file_atomic(out.scale(), json{{"cm_per_unit", cm}, {"source", "knowledge/scale.json"}}.dump(2) + "\n");
+  write_file_atomic(out.scale(), json{{"cm_per_unit", cm}, {"source", swapped ? "gt/scene.json" : "knowledge/scale.json"}}.dump(2) + "\n");
 
   if (data.roots.size() == 0) {
     log::warn("fur: every region of the knowledge is bald, so there is no fur to grow; writing an empty groom");
@@ -178,10 +256,11 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
     return summary;
   }
 
-  const geometry::Mesh outer = io::read_mesh(body_outputs(c.work).outer_regions());
-  const defur::SdfFile sdf = defur::read_sdf_file(d.bald_sdf());
-  data.bald_sdf = sdf;
-  fur::set_surface_inputs(data, outer, [&](std::int32_t r) { return knowledge.grows_fur(body::Region(r)); }, s.training.seed);
+  if (s.truth != "all") {
+    const geometry::Mesh outer = io::read_mesh(body_outputs(c.work).outer_regions());
+    data.bald_sdf = defur::read_sdf_file(d.bald_sdf());
+    fur::set_surface_inputs(data, outer, [&](std::int32_t r) { return knowledge.grows_fur(body::Region(r)); }, s.training.seed);
+  }
   data.fur_area = fur::fur_area(bald, vertex_fur);
   seconds["read"] = t.seconds();
 
@@ -197,7 +276,9 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
   const auto make_views = [&](const std::vector<std::uint32_t>& ids, std::vector<fur::FurView>& views) {
     for (std::uint32_t v : ids) {
       const fs::path nonbald_file = d.masks() / (names[v] + ".png");
-      const std::optional<io::Image> nonbald = fs::exists(nonbald_file) ? std::optional(io::read_image(nonbald_file)) : std::nullopt;
+      // The defur stage's non-bald masks belong to the pipeline's M_bald, not to the true one.
+      const std::optional<io::Image> nonbald =
+          s.truth != "all" && fs::exists(nonbald_file) ? std::optional(io::read_image(nonbald_file)) : std::nullopt;
       views.push_back(fur::make_fur_view(c.gpu, c.scene, v, nonbald ? &*nonbald : nullptr, bald, view_options));
     }
   };
@@ -214,18 +295,71 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
             full ? 100.0 * double(rendered) / double(full) : 0.0, " % of the photos' pixels)");
   if (data.train.empty()) log::warn("fur: no view has a photo and a mask; only the geometric losses will shape the fur");
 
+  // The ground truth (synth scenes) for the scores and the curve.
+  metrics::GroomTruth truth;
+  std::optional<metrics::StrandSample> gt_sample;
+  std::optional<geometry::Mesh> gt_outer;
+  json gt_info;
+  if (const auto gt = io::find_ground_truth(c.scene_dir)) {
+    if (fs::exists(gt->strands())) gt_sample = metrics::sample_strands(io::read_hair(gt->strands()), s.metric_strands, s.metric_points, 2);
+    if (fs::exists(gt->outer())) gt_outer = io::read_mesh(gt->outer());
+    truth.strands = gt_sample ? &*gt_sample : nullptr;
+    truth.outer = gt_outer ? &*gt_outer : nullptr;
+    gt_info = {{"strands", "gt/strands.hair"}, {"outer", "gt/outer.ply"}};
+    if (std::abs(gt->cm_per_unit - cm) > 1e-3 * gt->cm_per_unit)
+      log::warn("fur: the knowledge's scale (", cm, " cm per unit) differs from the ground truth's (", gt->cm_per_unit, "); metrics use the knowledge's");
+  }
+  const std::uint32_t score_strands = s.score_strands ? s.score_strands : s.training.strands;
+
   // Training, resumable.
   t.restart();
   std::unique_ptr<fur::StrandPrior> prior = fur::shipped_strand_prior(c.gpu);
   auto make_trainer = [&] { return std::make_unique<fur::FurTrainer>(c.gpu, data, *prior, s.field, s.training); };
   std::unique_ptr<fur::FurTrainer> trainer = make_trainer();
   const fs::path checkpoint = resume / "checkpoint.nfwt";
+  const fs::path curve_checkpoint = resume / "curve.jsonl";
+  std::string curve_lines;  // curve.jsonl so far, kept beside the checkpoint
   if (resume_or_discard("fur", checkpoint, [&] { return trainer->load_checkpoint(checkpoint); },
                         [&] {
                           prior = fur::shipped_strand_prior(c.gpu);
                           trainer = make_trainer();
-                        }))
+                        })) {
     log::info("fur: resuming from ", checkpoint.string(), " at step ", trainer->step());
+    if (std::ifstream in(curve_checkpoint); s.curve_seconds > 0 && in) curve_lines.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  // The curve: a point before the first step, every curve_seconds of training, and at the end. Its
+  // scoring is not training time (the x axis is the trainer's own clock).
+  double next_curve_point = 0;
+  std::uint32_t last_curve_step = 0;
+  const auto add_curve_point = [&] {
+    const json p = curve_point(*trainer, data, s, c.scene, truth, cm, score_strands);
+    curve_lines += p.dump() + "\n";
+    write_file_atomic(curve_checkpoint, curve_lines);
+    last_curve_step = trainer->step();
+    next_curve_point = (std::floor(p["seconds"].get<double>() / s.curve_seconds) + 1) * s.curve_seconds;
+    if (p.contains("fscore"))
+      log::info("fur: curve at ", p["seconds"].get<double>(), " s (step ", trainer->step(), "): F(2 cm, 20 deg) ",
+                p["fscore"].value("2cm_20deg", 0.0), ", F(2 mm, 20 deg) ", p["fscore"].value("2mm_20deg", 0.0),
+                ", held-out orientation ", p["held_out"]["orientation_error_deg"].get<double>(), " deg");
+  };
+  if (s.curve_seconds > 0) {
+    if (curve_lines.empty()) add_curve_point();
+    else {
+      // Points taken after the checkpoint's step are taken again.
+      std::istringstream lines(curve_lines);
+      curve_lines.clear();
+      for (std::string line; std::getline(lines, line);) {
+        const json p = json::parse(line, nullptr, false);
+        if (!p.is_object() || !p.contains("seconds") || !p["seconds"].is_number() || !p.contains("step") || !p["step"].is_number_unsigned())
+          throw InputError(curve_checkpoint.string() + ": not a curve; delete it to start the curve anew");
+        if (p["step"].get<std::uint32_t>() > trainer->step()) break;
+        curve_lines += line + "\n";
+        last_curve_step = p["step"].get<std::uint32_t>();
+        next_curve_point = (std::floor(p["seconds"].get<double>() / s.curve_seconds) + 1) * s.curve_seconds;
+      }
+      if (curve_lines.empty()) add_curve_point();
+    }
+  }
   log::info("fur: ", s.training.steps, " steps of ", std::min<std::size_t>(s.training.strands, data.roots.size()), " strands (", s.training.warm_steps,
             " warm-up), strand width ", trainer->strand_width(trainer->batch()) * cm * 10.0, " mm");
   Progress progress("fur", s.training.steps);
@@ -236,6 +370,7 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
     else
       std::snprintf(status, sizeof status, "loss %.4f sil %.3f orient %.4f chamfer %.2e", r.loss, r.silhouette, r.orientation, r.chamfer);
     progress.update(r.step, status);
+    if (s.curve_seconds > 0 && r.seconds >= next_curve_point && !interrupted()) add_curve_point();
     return !interrupted();
   });
   if (interrupted()) {
@@ -245,6 +380,8 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
                       "; checkpoint saved in " + checkpoint.string());
   }
   progress.finish();
+  if (s.curve_seconds > 0 && last_curve_step != trainer->step()) add_curve_point();
+  if (s.curve_seconds > 0) write_file_atomic(out.curve(), curve_lines);
   seconds["train"] = t.seconds();
   // After training, Ctrl-C or a kill stops at the next chunk of work with the trained state saved:
   // the same command then resumes at the last step and only redoes what follows.
@@ -254,27 +391,17 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
     throw Interrupted(std::string("fur: stopped during ") + during + " after " + std::to_string(trainer->step()) +
                       " steps; checkpoint saved in " + checkpoint.string());
   };
-  std::string curve;
-  for (const fur::FurStepReport& r : trainer->history()) curve += step_json(r).dump() + "\n";
-  write_file_atomic(out.training(), curve);
+  std::string loss_curve;
+  for (const fur::FurStepReport& r : trainer->history()) loss_curve += step_json(r).dump() + "\n";
+  write_file_atomic(out.training(), loss_curve);
 
   fur::save_fur_model(out.model(), trainer->field(), *prior, trainer->step(), s.training.train_decoder);
 
   // Held-out views.
   t.restart();
-  const std::uint32_t score_strands = s.score_strands ? s.score_strands : s.training.strands;
-  json held = json::array();
-  double iou = 0, orient_err = 0;
   std::vector<std::vector<float>> held_images;
-  for (const fur::FurView& v : data.held_out) {
-    stop_if_interrupted("scoring");
-    held_images.push_back(trainer->render(v, score_strands, s.training.seed + 7));
-    const fur::ViewScore score = fur::score_view(v, held_images.back());
-    held.push_back({{"camera", c.scene.cameras[v.camera].name}, {"silhouette_iou", score.silhouette_iou},
-                    {"orientation_error_deg", score.orientation_error_deg}, {"pixels", score.pixels}});
-    iou += score.silhouette_iou, orient_err += score.orientation_error_deg;
-  }
-  if (!data.held_out.empty()) iou /= double(data.held_out.size()), orient_err /= double(data.held_out.size());
+  const HeldOutScores held = score_held_out(*trainer, data.held_out, c.scene, score_strands, s.training.seed + 7, &held_images,
+                                            [&] { stop_if_interrupted("scoring"); });
   seconds["held_out"] = t.seconds();
 
   // Inference: the roots file when the count matches, else as many roots drawn anew.
@@ -282,10 +409,13 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
   fur::Roots infer_roots;
   const fur::Roots* roots = &data.roots;
   if (s.strands != data.roots.size()) {
-    infer_roots = fur::sample_roots(bald, read_face_frames(f.frames(), bald.triangle_count()), vertex_fur, s.strands, s.training.seed + 11);
+    const fur::FaceFrames frames = swapped ? swapped->frames : read_face_frames(f.frames(), bald.triangle_count());
+    infer_roots = fur::sample_roots(bald, frames, vertex_fur, s.strands, s.training.seed + 11);
     roots = &infer_roots;
-    fur::write_roots(out.roots(), infer_roots);  // what edit and export need to know where each strand grows
   }
+  // What edit and export need to know where each strand grows, when it is not frames/roots.npz.
+  const bool own_roots = roots != &data.roots || swapped.has_value();
+  if (own_roots) fur::write_roots(out.roots(), *roots);
   const std::uint32_t n = std::uint32_t(roots->size());
   std::vector<std::uint32_t> ids(n);
   for (std::uint32_t i = 0; i < n; ++i) ids[i] = i;
@@ -322,19 +452,6 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
   const io::StrandSet baseline = fur::baseline_groom(*roots, sample_ids, s.training.lying_angle_deg);
   const metrics::StrandSample groom_sample = metrics::sample_strands(groom, s.metric_strands, s.metric_points, 1);
   const metrics::StrandSample baseline_sample = metrics::sample_strands(baseline, s.metric_strands, s.metric_points, 1);
-  metrics::GroomTruth truth;
-  std::optional<metrics::StrandSample> gt_sample;
-  std::optional<geometry::Mesh> gt_outer;
-  json gt_info;
-  if (const auto gt = io::find_ground_truth(c.scene_dir)) {
-    if (fs::exists(gt->strands())) gt_sample = metrics::sample_strands(io::read_hair(gt->strands()), s.metric_strands, s.metric_points, 2);
-    if (fs::exists(gt->outer())) gt_outer = io::read_mesh(gt->outer());
-    truth.strands = gt_sample ? &*gt_sample : nullptr;
-    truth.outer = gt_outer ? &*gt_outer : nullptr;
-    gt_info = {{"strands", "gt/strands.hair"}, {"outer", "gt/outer.ply"}};
-    if (std::abs(gt->cm_per_unit - cm) > 1e-3 * gt->cm_per_unit)
-      log::warn("fur: the knowledge's scale (", cm, " cm per unit) differs from the ground truth's (", gt->cm_per_unit, "); metrics use the knowledge's");
-  }
   const json groom_scores = metrics::groom_scores(groom_sample, truth, cm);
   const json baseline_scores = metrics::groom_scores(baseline_sample, truth, cm);
   seconds["metrics"] = t.seconds();
@@ -360,7 +477,7 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
 
   const fur::FurStepReport last = trainer->last_report();
   json summary{{"strands", n},
-               {"roots_file", roots == &data.roots ? "frames/roots.npz" : "fur/roots.npz"},
+               {"roots_file", own_roots ? "fur/roots.npz" : "frames/roots.npz"},
                {"steps", trainer->step()},
                {"training_strands_per_step", std::min<std::size_t>(s.training.strands, data.roots.size())},
                {"strand_width_mm", trainer->strand_width(trainer->batch()) * cm * 10.0},
@@ -369,7 +486,7 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
                {"views", {{"train", data.train.size()}, {"held_out", data.held_out.size()}, {"orientation_reliability", reliability},
                           {"rendered_pixels_per_view", rendered / std::max<std::size_t>(1, data.train.size())},
                           {"rendered_fraction_of_photo", full ? double(rendered) / double(full) : 0.0}}},
-               {"held_out", {{"views", held}, {"silhouette_iou", iou}, {"orientation_error_deg", orient_err}}},
+               {"held_out", {{"views", held.views}, {"silhouette_iou", held.silhouette_iou}, {"orientation_error_deg", held.orientation_error_deg}}},
                {"groom", groom_scores},
                {"baseline", baseline_scores},
                {"previews", previews},
@@ -377,6 +494,13 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
                {"seconds_per_step", trainer->step() ? last.seconds / trainer->step() : 0.0},
                {"peak_device_bytes", c.gpu.peak_allocated_bytes()}};
   if (!gt_info.is_null()) summary["ground_truth"] = gt_info;
+  if (swapped) summary["truth"] = s.truth;
+  if (s.curve_seconds > 0) {
+    json curve = json::array();
+    std::istringstream lines(curve_lines);
+    for (std::string line; std::getline(lines, line);) curve.push_back(json::parse(line));
+    summary["curve"] = curve;
+  }
   summary["seconds_total"] = t_all.seconds();
   write_file_atomic(out.metrics(), summary.dump(2) + "\n");
   return summary;
@@ -423,6 +547,10 @@ const SettingsSchema<FurSettings>& fur_settings() {
         .add("checkpoint_interval", [](F& f) -> auto& { return f.training.checkpoint_interval; }, 0, 1e8,
              "steps between checkpoints (0: none; Ctrl-C always saves one)")
         .add("seed", [](F& f) -> auto& { return f.training.seed; }, 0, 4294967295.0, "random seed (initialisation, roots, views)")
+        .add("curve_seconds", [](F& f) -> auto& { return f.curve_seconds; }, 0, 1e6,
+             "training seconds between two points of curve.jsonl: held-out and ground-truth scores while it trains (0: none)")
+        .text("truth", [](F& f) -> auto& { return f.truth; }, {"none", "knowledge", "all"},
+              "synth scenes: train on the true knowledge (knowledge) or the true bald body, knowledge and roots (all), to measure what the earlier stages' errors cost")
         .check([](const F& f) { f.training.validate(); });
     return s;
   }();

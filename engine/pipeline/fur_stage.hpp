@@ -18,6 +18,7 @@ struct FurOutputs {
   std::filesystem::path metrics() const { return dir / "metrics.json"; }    // the stage summary
   std::filesystem::path previews() const { return dir / "previews"; }       // the groom over held-out photos
   std::filesystem::path roots() const { return dir / "roots.npz"; }         // when the groom's roots are not frames/roots.npz
+  std::filesystem::path curve() const { return dir / "curve.jsonl"; }       // with curve_seconds: scores against training time
 };
 inline FurOutputs fur_outputs(const std::filesystem::path& work) { return {work / "fur"}; }
 // The roots file of the groom in fur/strands.hair (one root per strand, same order): fur/roots.npz
@@ -37,6 +38,13 @@ struct FurSettings {
   std::uint32_t metric_strands = 20000;  // the paper compares 100,000 (preset paper); the mm thresholds cost ~N^2
   std::uint32_t score_strands = 0;  // strands rendered to score held-out views (0: the training batch)
   int preview_views = 3;
+  // Seconds of training between two points of curve.jsonl (0: none): the groom scored against the
+  // held-out views and, on synth scenes, the true strands, while it trains (the bench's curves).
+  double curve_seconds = 0;
+  // Inputs swapped for the scene's ground truth (synth scenes), to measure what the earlier stages'
+  // errors cost: "knowledge" (the true lengths and directions on the pipeline's M_bald), "all" (the
+  // true bald body, knowledge and roots; its baseline groom is the baseline (b)).
+  std::string truth = "none";
 };
 FurSettings fur_quality_preset(const std::string& quality);
 const SettingsSchema<FurSettings>& fur_settings();

@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "engine/core/json.hpp"
+#include "engine/fur/roots.hpp"
 #include "engine/io/mesh.hpp"
 #include "engine/io/strand_files.hpp"
 #include "tests/support/nf_process.hpp"
@@ -464,6 +465,39 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
     const Result wrong = run("pose --work " + work.string() + " --out " + (root / "posed2").string() + " --set joint.hed=0,40,0");
     CHECK(wrong.code == 2);
     CHECK(wrong.output.find("joints: ") != std::string::npos);
+  }
+  // The fur stage on the scene's truth (the bench's baseline (b) and ablations) with its curve of
+  // scores against training time.
+  {
+    const Result truthful = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + body + " --set knowledge.preset=cat" +
+                                small + " --set fur.truth=all --set fur.curve_seconds=0.01 --to fur --json");
+    INFO(truthful.output);
+    REQUIRE(truthful.code == 0);
+    const nf::json runs = nf::json::parse(truthful.output.substr(truthful.output.find('[')));
+    REQUIRE(runs.size() == 6);
+    const nf::json& ts = runs[5]["summary"];
+    CHECK(ts["truth"] == "all");
+    CHECK(ts["roots_file"] == "fur/roots.npz");  // roots on the true body, not frames/roots.npz
+    CHECK(nf::fur::read_roots(work / "fur" / "roots.npz").size() == 2500);
+    CHECK(nf::io::read_hair(work / "fur" / "strands.hair").strand_count() == 2500);
+    // The straight strands on the true body at the true lengths and directions (baseline (b)) are
+    // nearer the truth than those on the pipeline's body and knowledge (baseline (a)).
+    CHECK(ts["baseline"]["fscore"]["2cm_20deg"].get<double>() > fur_summary["baseline"]["fscore"]["2cm_20deg"].get<double>() + 5.0);
+    const nf::json& curve = ts["curve"];
+    REQUIRE(curve.size() >= 3);
+    CHECK(curve.front()["step"] == 0);
+    CHECK(curve.front()["seconds"].get<double>() == 0.0);
+    CHECK(curve.back()["step"] == 12);
+    for (std::size_t i = 0; i < curve.size(); ++i) {
+      CHECK(curve[i]["fscore"]["2cm_20deg"].get<double>() >= 0.0);
+      CHECK(curve[i]["held_out"]["silhouette_iou"].get<double>() > 0.0);
+      CHECK(curve[i]["held_out"]["orientation_error_deg"].get<double>() >= 0.0);  // 64 px: no pixel far enough from the outline
+      if (i > 0) CHECK(curve[i]["seconds"].get<double>() >= curve[i - 1]["seconds"].get<double>());
+    }
+    std::ifstream lines(work / "fur" / "curve.jsonl");
+    std::size_t count = 0;
+    for (std::string line; std::getline(lines, line);) count += !line.empty();
+    CHECK(count == curve.size());
   }
   // Knowledge without any fur: defur still makes M_bald, frames finds no roots and says so.
   const fs::path bald_knowledge = root / "bald_knowledge.json";

@@ -1,0 +1,144 @@
+#include "engine/bench/fur_scene_suite.hpp"
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "engine/bench/record.hpp"
+#include "engine/bench/scratch_folder.hpp"
+#include "engine/core/error.hpp"
+#include "engine/core/log.hpp"
+#include "engine/pipeline/fur_stage.hpp"
+#include "engine/pipeline/stages.hpp"
+#include "engine/synth/synth_scene.hpp"
+
+namespace nf::bench {
+namespace fs = std::filesystem;
+namespace {
+
+std::vector<std::string> env_list(const char* name, std::vector<std::string> fallback) {
+  const char* value = std::getenv(name);
+  if (!value) return fallback;
+  std::vector<std::string> out;
+  std::istringstream in(value);
+  for (std::string item; std::getline(in, item, ',');)
+    if (!item.empty() && item != "none") out.push_back(item);
+  return out;
+}
+
+// The fur stage's settings for a variant of the run ("" : none).
+std::vector<std::string> variant_settings(const std::string& variant) {
+  if (variant.empty()) return {};
+  if (variant == "warm_off") return {"fur.warm_start=0", "fur.warm_steps=0"};
+  if (variant == "truth_knowledge") return {"fur.truth=knowledge"};
+  if (variant == "truth_all") return {"fur.truth=all"};
+  for (const char* loss : {"silhouette", "orientation", "direction", "chamfer", "penetration", "curvature"})
+    if (variant == std::string("no_") + loss) return {std::string("fur.") + loss + "_weight=0"};
+  throw UsageError("NF_BENCH_FUR_VARIANTS: unknown variant '" + variant +
+                   "' (warm_off, truth_knowledge, truth_all, no_silhouette, no_orientation, no_direction, no_chamfer, no_penetration, no_curvature)");
+}
+
+json read_json(const fs::path& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file.string() + ": missing");
+  return json::parse(in);
+}
+
+// A groom's scores as the record keeps them: F-scores, tips to the envelope.
+json groom_summary(const json& scores) {
+  json s = json::object();
+  if (scores.contains("fscore")) s["fscore"] = scores["fscore"];
+  if (scores.contains("tips_to_outer")) s["tips_to_outer"] = scores["tips_to_outer"];
+  return s;
+}
+
+}  // namespace
+
+json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
+  // NF_BENCH_FUR_DIR keeps the scenes and WORK folders: a second run reuses the earlier stages.
+  const ScratchFolder scratch("NF_BENCH_FUR_DIR", "nf-bench-fur-");
+  const fs::path& root = scratch.path();
+  const std::vector<std::string> animals = env_list("NF_BENCH_FUR_ANIMALS", options.quick ? std::vector<std::string>{"cat"} : std::vector<std::string>{"cat", "lion"});
+  const std::vector<std::string> presets = env_list("NF_BENCH_FUR_PRESETS", options.quick ? std::vector<std::string>{"draft"} : std::vector<std::string>{"draft", "default"});
+  const std::vector<std::string> variants =
+      env_list("NF_BENCH_FUR_VARIANTS", options.quick ? std::vector<std::string>{"truth_all"}
+                                                      : std::vector<std::string>{"truth_all", "truth_knowledge", "warm_off", "no_silhouette", "no_orientation",
+                                                                                 "no_direction", "no_chamfer", "no_penetration", "no_curvature"});
+  for (const std::string& v : variants) variant_settings(v);  // unknown names fail before any work
+  for (const std::string& p : presets)
+    if (p != "draft" && p != "default" && p != "paper") throw UsageError("NF_BENCH_FUR_PRESETS: unknown preset '" + p + "' (draft, default, paper)");
+  const double curve_seconds = options.quick ? 10 : 60;
+
+  json records = json::array();
+  for (const std::string& animal : animals) {
+    const fs::path scene = root / animal, work = root / (animal + "-work");
+    synth::SynthOptions so;
+    so.animal = animal, so.seed = 1;
+    so.views = options.quick ? 12 : 36;
+    so.resolution = options.quick ? 128 : 512;
+    so.strands = options.quick ? 20000 : 100000;
+    if (!fs::exists(scene / "gt" / "scene.json")) synth::synthesize_scene(scene, so);
+    const json scene_params{{"animal", animal}, {"views", so.views}, {"resolution", so.resolution}, {"gt_strands", so.strands}};
+
+    for (std::size_t p = 0; p < presets.size(); ++p) {
+      // The earlier stages at draft (the same surface, body and roots for every preset and
+      // variant); the fur stage at the preset's values, with its curve.
+      std::vector<std::string> fur_preset;
+      const json preset_values = pipeline::fur_settings().values(presets[p], json::object());
+      for (const auto& [key, value] : preset_values.items())
+        fur_preset.push_back("fur." + key + "=" + (value.is_string() ? value.get<std::string>() : value.dump()));
+      std::vector<std::string> runs{""};
+      if (p == 0) runs.insert(runs.end(), variants.begin(), variants.end());
+      for (const std::string& variant : runs) {
+        pipeline::ReconstructOptions ro;
+        ro.scene = scene, ro.work = work, ro.quality = "draft";
+        ro.run.to = "fur";
+        ro.settings = {"knowledge.preset=" + animal};
+        if (options.quick) ro.settings.push_back("neus.steps=150");
+        ro.settings.insert(ro.settings.end(), fur_preset.begin(), fur_preset.end());
+        // The groom's inference is not what is measured: the metrics' strands suffice.
+        ro.settings.push_back("fur.strands=" + std::to_string(pipeline::fur_settings().resolve(presets[p], json::object()).metric_strands));
+        ro.settings.push_back("fur.curve_seconds=" + json(curve_seconds).dump());
+        ro.settings.push_back("fur.preview_views=0");
+        if (options.quick) ro.settings.insert(ro.settings.end(), {"fur.steps=60", "fur.warm_steps=10", "fur.batch=1500", "fur.resolution=128"});
+        for (const std::string& v : variant_settings(variant)) ro.settings.push_back(v);
+        log::info("bench fur: ", animal, ", preset ", presets[p], variant.empty() ? "" : ", variant " + variant);
+        const std::vector<pipeline::StageOutcome> outcomes = pipeline::reconstruct(ctx, ro);
+        const json m = read_json(pipeline::fur_outputs(work).metrics());
+
+        json stage_seconds = json::object();
+        for (const pipeline::StageOutcome& o : outcomes) stage_seconds[o.name] = {{"seconds", o.seconds}, {"ran", o.ran}};
+        json metrics{{"groom", groom_summary(m.at("groom"))},
+                     {"held_out", {{"silhouette_iou", m["held_out"]["silhouette_iou"]}, {"orientation_error_deg", m["held_out"]["orientation_error_deg"]}}},
+                     {"steps", m.at("steps")},
+                     {"strands_per_step", m.at("training_strands_per_step")},
+                     {"seconds_per_step", m.at("seconds_per_step")},
+                     {"pass_seconds_last_step", m["final"].value("pass_seconds", json::object())},
+                     {"skipped_steps", m.at("skipped_steps")},
+                     {"orientation_reliability", m["views"]["orientation_reliability"]},
+                     {"rendered_fraction_of_photo", m["views"]["rendered_fraction_of_photo"]},
+                     {"stages", stage_seconds},
+                     {"fur_seconds", m.at("seconds")}};
+        // The baseline groom on the roots this run used: (a) on the pipeline's, (b) on the truth's.
+        metrics[variant == "truth_all" ? "baseline_b" : "baseline_a"] = groom_summary(m.at("baseline"));
+        json points = json::array();
+        for (const json& c : m.at("curve"))
+          if (c.contains("fscore")) points.push_back({c["seconds"], c["fscore"]["2cm_20deg"]});
+        metrics["curve_points"] = m.at("curve");
+        json params = scene_params;
+        params["preset"] = presets[p];
+        params["variant"] = variant.empty() ? "none" : variant;
+        params["earlier_stages"] = "draft";
+        Timing timing;
+        timing.seconds = {m.at("seconds_total").get<double>()};
+        json record = make_record(ctx, "fur", animal + "_" + presets[p] + (variant.empty() ? "" : "_" + variant), params, timing, metrics);
+        record["curve"] = {{"x", "training seconds"}, {"y", "F-score at (2 cm, 20 deg), %"}, {"points", points}};
+        records.push_back(record);
+      }
+    }
+  }
+  return records;
+}
+
+}  // namespace nf::bench
