@@ -12,7 +12,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "engine/core/atomic_file.hpp"
@@ -35,7 +37,56 @@ class OStreamAdapter : public Imf::OStream {
   std::ostream& out_;
 };
 
+// A header may declare any size, and decoding allocates it before reading the pixels: refuse what
+// no photo is, and what the file cannot hold (deflate packs at most about 1032:1, and a 1-bit PNG 8
+// pixels a byte before that; JPEG and EXR's codecs far less).
+void check_declared_size(const std::filesystem::path& path, std::uint64_t w, std::uint64_t h, std::uint64_t channels, std::uint64_t file_bytes) {
+  const std::uint64_t declared = w * h;
+  const std::string size_text = std::to_string(w) + " x " + std::to_string(h);
+  if (declared > kMaxImagePixels)
+    throw InputError(path.string() + ": declares " + size_text + " pixels, more than nf_gpu reads (" + std::to_string(kMaxImagePixels) + ")");
+  if (declared * std::max<std::uint64_t>(channels, 1) > 8800 * file_bytes + 65536)
+    throw InputError(path.string() + ": declares " + size_text + " pixels in " + std::to_string(file_bytes) + " bytes: truncated or not an image");
+}
+
+// The data window from an EXR's first header, read before OpenEXR opens the file: OpenEXR sizes
+// its decompression buffers from it while opening (a 304-byte file made it allocate and clear
+// gigabytes). nullopt when the header does not say (OpenEXR then gives the error).
+std::optional<std::pair<std::uint64_t, std::uint64_t>> exr_declared_size(const std::vector<char>& bytes) {
+  std::size_t at = 8;  // magic number and version
+  const auto text = [&]() -> std::optional<std::string> {
+    const std::size_t end = std::find(bytes.begin() + std::ptrdiff_t(std::min(at, bytes.size())), bytes.end(), '\0') - bytes.begin();
+    if (end >= bytes.size()) return std::nullopt;
+    std::string t(bytes.data() + at, end - at);
+    at = end + 1;
+    return t;
+  };
+  const auto int32 = [&](std::size_t where) {
+    std::int32_t v;
+    std::memcpy(&v, bytes.data() + where, 4);
+    return v;
+  };
+  while (at < bytes.size()) {
+    const std::optional<std::string> name = text();
+    if (!name || name->empty()) return std::nullopt;
+    const std::optional<std::string> type = text();
+    if (!type || at + 4 > bytes.size()) return std::nullopt;
+    const std::int32_t size = int32(at);
+    at += 4;
+    if (size < 0 || at + std::size_t(size) > bytes.size()) return std::nullopt;
+    if (*name == "dataWindow" && *type == "box2i" && size == 16) {
+      const std::int64_t w = std::int64_t(int32(at + 8)) - int32(at) + 1, h = std::int64_t(int32(at + 12)) - int32(at + 4) + 1;
+      if (w <= 0 || h <= 0) return std::nullopt;
+      return std::pair{std::uint64_t(w), std::uint64_t(h)};
+    }
+    at += std::size_t(size);
+  }
+  return std::nullopt;
+}
+
 Image read_exr(const std::filesystem::path& path) {
+  if (const std::optional<std::pair<std::uint64_t, std::uint64_t>> size = exr_declared_size(read_file_bytes(path)))
+    check_declared_size(path, size->first, size->second, 1, std::filesystem::file_size(path));
   try {
     Imf::InputFile file(path.c_str());
     const Imath::Box2i window = file.header().dataWindow();
@@ -48,6 +99,7 @@ Image read_exr(const std::filesystem::path& path) {
       for (auto it = file.header().channels().begin(); it != file.header().channels().end() && names.empty(); ++it)
         names.emplace_back(it.name());  // a single-channel image: Z, Y, depth...
     if (names.empty()) throw InputError(path.string() + ": EXR without channels");
+    check_declared_size(path, std::uint64_t(w), std::uint64_t(h), names.size(), std::filesystem::file_size(path));
     Image img;
     img.width = std::uint32_t(w), img.height = std::uint32_t(h), img.channels = std::uint32_t(names.size());
     img.pixels.assign(std::size_t(w) * std::size_t(h) * names.size(), 0.f);
@@ -79,15 +131,7 @@ Image read_image(const std::filesystem::path& path) {
   int w = 0, h = 0, c = 0;
   if (!stbi_info_from_memory(data, size, &w, &h, &c))
     throw InputError(path.string() + ": not a readable PNG or JPEG (" + stbi_failure_reason() + ")");
-  // A header may declare any size, and decoding allocates it before reading the pixels: refuse what
-  // no photo is, and what the file cannot hold (deflate packs at most about 1032:1, and a 1-bit
-  // PNG 8 pixels a byte before that; JPEG far less).
-  const std::uint64_t declared = std::uint64_t(w) * std::uint64_t(h);
-  const std::string size_text = std::to_string(w) + " x " + std::to_string(h);
-  if (declared > kMaxImagePixels)
-    throw InputError(path.string() + ": declares " + size_text + " pixels, more than nf_gpu reads (" + std::to_string(kMaxImagePixels) + ")");
-  if (declared * std::uint64_t(std::max(c, 1)) > 8800 * std::uint64_t(bytes.size()) + 65536)
-    throw InputError(path.string() + ": declares " + size_text + " pixels in " + std::to_string(bytes.size()) + " bytes: truncated or not an image");
+  check_declared_size(path, std::uint64_t(w), std::uint64_t(h), std::uint64_t(std::max(c, 1)), bytes.size());
   Image img;
   if (stbi_is_16_bit_from_memory(data, size)) {
     std::unique_ptr<stbi_us, void (*)(void*)> px(stbi_load_16_from_memory(data, size, &w, &h, &c, 0), stbi_image_free);

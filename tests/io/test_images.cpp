@@ -90,6 +90,9 @@ TEST_CASE("an image header declaring more pixels than its file holds is refused 
   CHECK_THROWS_WITH_AS(read_image(path), doctest::Contains("declares 3288525 x 228 pixels, more than nf_gpu reads"), InputError);
   std::ofstream(path, std::ios::binary) << "P5 8000 8000 255 ";
   CHECK_THROWS_WITH_AS(read_image(path), doctest::Contains("declares 8000 x 8000 pixels in 17 bytes: truncated"), InputError);
+  // The same for EXR (the fuzzer's finding: 304 bytes declaring a data window that took seconds to
+  // allocate and fill).
+  CHECK_THROWS_WITH_AS(read_image(fs::path(NF_TEST_DATA) / "huge_window.exr"), doctest::Contains("bytes: truncated or not an image"), InputError);
   // A uniform mask compresses far (here 100:1) and is still read.
   std::vector<std::uint8_t> black(std::size_t(2000) * 1500, 0);
   REQUIRE(stbi_write_png(path.c_str(), 2000, 1500, 1, black.data(), 2000));
