@@ -49,10 +49,11 @@ void check_declared_size(const std::filesystem::path& path, std::uint64_t w, std
     throw InputError(path.string() + ": declares " + size_text + " pixels in " + std::to_string(file_bytes) + " bytes: truncated or not an image");
 }
 
-// The data window from an EXR's first header, read before OpenEXR opens the file: OpenEXR sizes
-// its decompression buffers from it while opening (a 304-byte file made it allocate and clear
-// gigabytes). nullopt when the header does not say (OpenEXR then gives the error).
-std::optional<std::pair<std::uint64_t, std::uint64_t>> exr_declared_size(const std::vector<char>& bytes) {
+// The data window from an EXR's first header, read before OpenEXR opens the file: OpenEXR allocates
+// every attribute's declared size, and sizes its decompression buffers from the data window, while
+// opening (304-byte files made it allocate and clear gigabytes). InputError for an attribute larger
+// than the file; nullopt when the header does not say (OpenEXR then gives the error).
+std::optional<std::pair<std::uint64_t, std::uint64_t>> exr_declared_size(const std::filesystem::path& path, const std::vector<char>& bytes) {
   std::size_t at = 8;  // magic number and version
   const auto text = [&]() -> std::optional<std::string> {
     const std::size_t end = std::find(bytes.begin() + std::ptrdiff_t(std::min(at, bytes.size())), bytes.end(), '\0') - bytes.begin();
@@ -73,7 +74,9 @@ std::optional<std::pair<std::uint64_t, std::uint64_t>> exr_declared_size(const s
     if (!type || at + 4 > bytes.size()) return std::nullopt;
     const std::int32_t size = int32(at);
     at += 4;
-    if (size < 0 || at + std::size_t(size) > bytes.size()) return std::nullopt;
+    if (size < 0 || at + std::size_t(size) > bytes.size())
+      throw InputError(path.string() + ": EXR header attribute '" + shorten(*name, 40) + "' declares " + std::to_string(size) + " bytes, the file holds " +
+                       std::to_string(bytes.size()) + ": truncated or not an EXR");
     if (*name == "dataWindow" && *type == "box2i" && size == 16) {
       const std::int64_t w = std::int64_t(int32(at + 8)) - int32(at) + 1, h = std::int64_t(int32(at + 12)) - int32(at + 4) + 1;
       if (w <= 0 || h <= 0) return std::nullopt;
@@ -85,7 +88,7 @@ std::optional<std::pair<std::uint64_t, std::uint64_t>> exr_declared_size(const s
 }
 
 Image read_exr(const std::filesystem::path& path) {
-  if (const std::optional<std::pair<std::uint64_t, std::uint64_t>> size = exr_declared_size(read_file_bytes(path)))
+  if (const std::optional<std::pair<std::uint64_t, std::uint64_t>> size = exr_declared_size(path, read_file_bytes(path)))
     check_declared_size(path, size->first, size->second, 1, std::filesystem::file_size(path));
   try {
     Imf::InputFile file(path.c_str());

@@ -93,6 +93,12 @@ TEST_CASE("an image header declaring more pixels than its file holds is refused 
   // The same for EXR (the fuzzer's finding: 304 bytes declaring a data window that took seconds to
   // allocate and fill).
   CHECK_THROWS_WITH_AS(read_image(fs::path(NF_TEST_DATA) / "huge_window.exr"), doctest::Contains("bytes: truncated or not an image"), InputError);
+  // An EXR header attribute declaring 2 GB in a 30-byte file (OpenEXR would allocate it first).
+  const fs::path exr = fs::temp_directory_path() / "nf_test_huge_attribute.exr";
+  std::ofstream(exr, std::ios::binary) << std::string("\x76\x2f\x31\x01\x02\x00\x00\x00", 8) << std::string("channels\0chlist\0", 16)
+                                       << std::string("\x00\x00\xff\x7f", 4) << "xx";
+  CHECK_THROWS_WITH_AS(read_image(exr), doctest::Contains("attribute 'channels' declares 2147418112 bytes, the file holds 30"), InputError);
+  fs::remove(exr);
   // A uniform mask compresses far (here 100:1) and is still read.
   std::vector<std::uint8_t> black(std::size_t(2000) * 1500, 0);
   REQUIRE(stbi_write_png(path.c_str(), 2000, 1500, 1, black.data(), 2000));
