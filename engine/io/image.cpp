@@ -51,9 +51,13 @@ void check_declared_size(const std::filesystem::path& path, std::uint64_t w, std
 
 // The data window from an EXR's first header, read before OpenEXR opens the file: OpenEXR allocates
 // every attribute's declared size, and sizes its decompression buffers from the data window, while
-// opening (304-byte files made it allocate and clear gigabytes). InputError for an attribute larger
-// than the file; nullopt when the header does not say (OpenEXR then gives the error).
+// opening (304-byte files made it allocate and clear gigabytes). Every attribute of every header
+// (a multi-part file has several) is checked, not only those before the data window. InputError for
+// an attribute larger than the file; nullopt when the header does not say (OpenEXR then gives the
+// error).
 std::optional<std::pair<std::uint64_t, std::uint64_t>> exr_declared_size(const std::filesystem::path& path, const std::vector<char>& bytes) {
+  if (bytes.size() < 8) return std::nullopt;
+  const bool multipart = (std::uint8_t(bytes[5]) & 0x10) != 0;  // version flags, bit 12
   std::size_t at = 8;  // magic number and version
   const auto text = [&]() -> std::optional<std::string> {
     const std::size_t end = std::find(bytes.begin() + std::ptrdiff_t(std::min(at, bytes.size())), bytes.end(), '\0') - bytes.begin();
@@ -67,24 +71,32 @@ std::optional<std::pair<std::uint64_t, std::uint64_t>> exr_declared_size(const s
     std::memcpy(&v, bytes.data() + where, 4);
     return v;
   };
-  while (at < bytes.size()) {
+  std::optional<std::pair<std::uint64_t, std::uint64_t>> window;
+  bool window_bad = false;
+  for (std::size_t attributes = 0; at < bytes.size();) {
     const std::optional<std::string> name = text();
-    if (!name || name->empty()) return std::nullopt;
+    if (!name) break;
+    if (name->empty()) {  // the end of a header; a multi-part file ends with an empty header
+      if (!multipart || attributes == 0) break;
+      attributes = 0;
+      continue;
+    }
+    ++attributes;
     const std::optional<std::string> type = text();
-    if (!type || at + 4 > bytes.size()) return std::nullopt;
+    if (!type || at + 4 > bytes.size()) break;
     const std::int32_t size = int32(at);
     at += 4;
     if (size < 0 || at + std::size_t(size) > bytes.size())
       throw InputError(path.string() + ": EXR header attribute '" + shorten(*name, 40) + "' declares " + std::to_string(size) + " bytes, the file holds " +
                        std::to_string(bytes.size()) + ": truncated or not an EXR");
-    if (*name == "dataWindow" && *type == "box2i" && size == 16) {
+    if (*name == "dataWindow" && *type == "box2i" && size == 16 && !window && !window_bad) {
       const std::int64_t w = std::int64_t(int32(at + 8)) - int32(at) + 1, h = std::int64_t(int32(at + 12)) - int32(at + 4) + 1;
-      if (w <= 0 || h <= 0) return std::nullopt;
-      return std::pair{std::uint64_t(w), std::uint64_t(h)};
+      if (w <= 0 || h <= 0) window_bad = true;
+      else window = std::pair{std::uint64_t(w), std::uint64_t(h)};
     }
     at += std::size_t(size);
   }
-  return std::nullopt;
+  return window;
 }
 
 Image read_exr(const std::filesystem::path& path) {

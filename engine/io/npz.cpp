@@ -142,7 +142,7 @@ std::string npy_bytes(const NpyWrite& a, const std::string& where) {
 
 }  // namespace
 
-void write_npz(const std::filesystem::path& file, const std::vector<NpyWrite>& arrays) {
+void write_npz(const std::filesystem::path& file, const std::vector<NpyWrite>& arrays, NpzMembers members) {
   const std::filesystem::path temp = file.string() + ".partial";
   std::filesystem::remove(temp);
   int error = 0;
@@ -158,8 +158,9 @@ void write_npz(const std::filesystem::path& file, const std::vector<NpyWrite>& a
       throw;
     }
     zip_source_t* src = zip_source_buffer(z, buffers.back().data(), buffers.back().size(), 0);
-    if (!src || zip_file_add(z, (a.name + ".npy").c_str(), src, ZIP_FL_OVERWRITE) < 0) {
-      if (src) zip_source_free(src);
+    const zip_int64_t index = src ? zip_file_add(z, (a.name + ".npy").c_str(), src, ZIP_FL_OVERWRITE) : -1;
+    if (index < 0 || (members == NpzMembers::stored && zip_set_file_compression(z, zip_uint64_t(index), ZIP_CM_STORE, 0) != 0)) {
+      if (src && index < 0) zip_source_free(src);
       zip_discard(z);
       throw InputError(file.string() + ": cannot add array '" + a.name + "'");
     }

@@ -17,13 +17,16 @@ struct NpyArray {
 NpyArray read_npz_array(const std::filesystem::path& file, const std::string& name);
 std::vector<std::string> npz_array_names(const std::filesystem::path& file);
 
-// Writes arrays (C order; libzip deflates each member) to a new .npz, atomically. dtype: <f8, <f4, <i8, <i4 or <u4.
+// Writes arrays (C order; libzip deflates each member unless stored) to a new .npz, atomically. dtype: <f8, <f4, <i8, <i4 or <u4.
 struct NpyWrite {
   std::string name;
   std::vector<std::uint64_t> shape;
   std::string dtype = "<f8";
   std::vector<double> values;
 };
-void write_npz(const std::filesystem::path& file, const std::vector<NpyWrite>& arrays);
+// stored: members uncompressed, as numpy.savez writes them (the fuzz targets use it: a deflate
+// stream's set-up costs more than the reader's checks they exercise).
+enum class NpzMembers { deflated, stored };
+void write_npz(const std::filesystem::path& file, const std::vector<NpyWrite>& arrays, NpzMembers members = NpzMembers::deflated);
 
 }  // namespace nf::io

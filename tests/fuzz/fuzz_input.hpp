@@ -6,7 +6,7 @@
 // Readers of .npz files that nf_gpu writes itself (grids, roots, per-vertex fur, a SMAL model) get
 // structured inputs: the bytes describe arrays, which are written as a valid .npz, so the fuzzer
 // explores the reader's checks of names, shapes and values instead of zip checksums (the zip layer
-// has its own target, fuzz_npz). Per array, in order:
+// has its own target, fuzz_npz; members are stored, not deflated, for speed). Per array, in order:
 //   1 byte   flags: bit 0 drops the array, bits 1-2 its dtype (<f4, <f8, <i4, <u4 in that order
 //            starting at the array's usual dtype), bits 3-4 the rank (0-3)
 //   2 bytes  per dimension, little endian, modulo 8193 (element count capped at 2^16: larger
@@ -99,7 +99,7 @@ inline void write_fuzz_npz(const std::filesystem::path& file, FuzzBytes& in, con
     if (!(flags & 1)) arrays.push_back(std::move(a));
   }
   if (arrays.empty()) arrays.push_back({"unrelated", {1}, "<f4", {0.0}});  // libzip writes no empty archive
-  io::write_npz(file, arrays);
+  io::write_npz(file, arrays, io::NpzMembers::stored);
 }
 
 }  // namespace nf::fuzz

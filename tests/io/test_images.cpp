@@ -98,6 +98,17 @@ TEST_CASE("an image header declaring more pixels than its file holds is refused 
   std::ofstream(exr, std::ios::binary) << std::string("\x76\x2f\x31\x01\x02\x00\x00\x00", 8) << std::string("channels\0chlist\0", 16)
                                        << std::string("\x00\x00\xff\x7f", 4) << "xx";
   CHECK_THROWS_WITH_AS(read_image(exr), doctest::Contains("attribute 'channels' declares 2147418112 bytes, the file holds 30"), InputError);
+  // The same attribute after a small data window (the campaign's next finding: only the attributes
+  // before the data window were checked, and OpenEXR cleared megabytes per input).
+  std::ofstream(exr, std::ios::binary) << std::string("\x76\x2f\x31\x01\x02\x00\x00\x00", 8) << std::string("dataWindow\0box2i\0", 17)
+                                       << std::string("\x10\0\0\0", 4) << std::string(8, '\0') << std::string("\x01\0\0\0\x01\0\0\0", 8)
+                                       << std::string("junk\0opaque\0", 12) << std::string("\x00\x00\x00\x01", 4) << "xx";
+  CHECK_THROWS_WITH_AS(read_image(exr), doctest::Contains("attribute 'junk' declares 16777216 bytes"), InputError);
+  // And in the second header of a multi-part file.
+  std::ofstream(exr, std::ios::binary) << std::string("\x76\x2f\x31\x01\x02\x10\x00\x00", 8) << std::string("name\0string\0", 12)
+                                       << std::string("\x01\0\0\0", 4) << "a" << std::string(1, '\0') << std::string("name\0string\0", 12)
+                                       << std::string("\x00\x00\x00\x01", 4) << "xx";
+  CHECK_THROWS_WITH_AS(read_image(exr), doctest::Contains("attribute 'name' declares 16777216 bytes"), InputError);
   fs::remove(exr);
   // A uniform mask compresses far (here 100:1) and is still read.
   std::vector<std::uint8_t> black(std::size_t(2000) * 1500, 0);

@@ -14,6 +14,7 @@
 #include "engine/core/error.hpp"
 #include "engine/io/image.hpp"
 #include "engine/io/json_fields.hpp"
+#include "engine/io/npz.hpp"
 #include "engine/io/scene.hpp"
 #include "tests/support/files.hpp"
 #include "tests/support/scene_fixtures.hpp"
@@ -249,4 +250,23 @@ TEST_CASE("JSON helpers: a matrix by rows, errors by path; untrusted text bounde
   CHECK(io::parse_json_bounded("[[1]]", 4).has_value());
   CHECK_FALSE(io::parse_json_bounded(std::string(1000, '[') + std::string(1000, ']'), 32).has_value());
   CHECK_FALSE(io::parse_json_bounded("{not json", 32).has_value());
+}
+
+TEST_CASE("write_npz deflates members by default and stores them when asked; both read back exactly") {
+  const fs::path file = fs::temp_directory_path() / "nf_test_members.npz";
+  const std::vector<NpyWrite> arrays = {{"a", {2, 3}, "<f4", {1, 2, 3, 4, 5, 6.5}}, {"b", {4}, "<i4", {0, -1, 7, 1 << 20}}};
+  for (const NpzMembers members : {NpzMembers::deflated, NpzMembers::stored}) {
+    write_npz(file, arrays, members);
+    CHECK(read_npz_array(file, "a").shape == std::vector<std::uint64_t>{2, 3});
+    CHECK(read_npz_array(file, "a").values == arrays[0].values);
+    CHECK(read_npz_array(file, "b").values == arrays[1].values);
+    int error = 0;
+    zip_t* z = zip_open(file.c_str(), ZIP_RDONLY, &error);
+    REQUIRE(z != nullptr);
+    zip_stat_t st;
+    REQUIRE(zip_stat(z, "a.npy", 0, &st) == 0);
+    CHECK(st.comp_method == (members == NpzMembers::stored ? ZIP_CM_STORE : ZIP_CM_DEFLATE));
+    zip_close(z);
+  }
+  fs::remove(file);
 }
