@@ -50,27 +50,33 @@ Allocation allocate(Context::Impl& m, std::uint64_t bytes, VkMemoryPropertyFlags
   alloc.memoryTypeIndex = memory_type;
   a.memory_type = memory_type;
   // More than the memory heap holds (on lavapipe: the machine's RAM, where the driver would
-  // overcommit and the kernel kill the process later) fails here, with the error below. So does
-  // more than NF_FAULT_DEVICE_MEMORY_MB, the tests' stand-in for a small device.
-  const std::uint64_t heap = m.memory_properties.memoryHeaps[m.memory_properties.memoryTypes[memory_type].heapIndex].size;
-  const std::uint64_t budget = m.options.fault_memory_bytes ? std::min(heap, m.options.fault_memory_bytes) : heap;
-  const VkResult r = m.allocated_bytes.load() + req.size > budget ? VK_ERROR_OUT_OF_DEVICE_MEMORY
-                                                                  : vkAllocateMemory(m.device, &alloc, nullptr, &a.memory);
+  // overcommit and the kernel kill the process later) fails here, with the error below, counting
+  // what nf_gpu holds in that heap. So does more than NF_FAULT_DEVICE_MEMORY_MB in all heaps
+  // together, the tests' stand-in for a small device.
+  const std::uint32_t heap_index = m.memory_properties.memoryTypes[memory_type].heapIndex;
+  const std::uint64_t heap = m.memory_properties.memoryHeaps[heap_index].size;
+  const std::uint64_t fault = m.options.fault_memory_bytes;
+  const bool over_fault = fault && m.allocated_bytes.load() + req.size > fault;
+  const bool over_heap = m.heap_bytes[heap_index].load() + req.size > heap;
+  const VkResult r = over_fault || over_heap ? VK_ERROR_OUT_OF_DEVICE_MEMORY : vkAllocateMemory(m.device, &alloc, nullptr, &a.memory);
   if (r != VK_SUCCESS) {
     vkDestroyBuffer(m.device, a.buffer, nullptr);
-    if (r == VK_ERROR_OUT_OF_DEVICE_MEMORY || r == VK_ERROR_OUT_OF_HOST_MEMORY)
+    if (r == VK_ERROR_OUT_OF_DEVICE_MEMORY || r == VK_ERROR_OUT_OF_HOST_MEMORY) {
+      const std::uint64_t held = over_fault ? m.allocated_bytes.load() : m.heap_bytes[heap_index].load();
       throw DeviceLimitError("buffer '" + name + "': out of memory allocating " + std::to_string(req.size) + " bytes (" +
-                        detail::result_name(r) + "); nf_gpu holds " + std::to_string(m.allocated_bytes.load()) +
-                        " bytes already, the device " + std::to_string(budget) + " in all");
+                             detail::result_name(r) + "); nf_gpu holds " + std::to_string(held) + " bytes already" +
+                             (over_fault ? ", the device " + std::to_string(fault) + " in all"
+                                         : " in memory heap " + std::to_string(heap_index) + ", which holds " + std::to_string(heap) + " in all"));
+    }
     NF_VK_CHECK(r);
   }
   a.bytes = req.size;
-  m.note_allocation(std::int64_t(req.size));
+  m.note_allocation(heap_index, std::int64_t(req.size));
   const VkResult bound = vkBindBufferMemory(m.device, a.buffer, a.memory, 0);
   if (bound != VK_SUCCESS) {
     vkDestroyBuffer(m.device, a.buffer, nullptr);
     vkFreeMemory(m.device, a.memory, nullptr);
-    m.note_allocation(-std::int64_t(a.bytes));
+    m.note_allocation(heap_index, -std::int64_t(a.bytes));
     NF_VK_CHECK(bound);
   }
   m.name_object(VK_OBJECT_TYPE_BUFFER, std::uint64_t(a.buffer), name);
@@ -81,7 +87,7 @@ void free_allocation(Context::Impl& m, Allocation& a) {
   if (a.buffer) vkDestroyBuffer(m.device, a.buffer, nullptr);
   if (a.memory) {
     vkFreeMemory(m.device, a.memory, nullptr);
-    m.note_allocation(-std::int64_t(a.bytes));
+    m.note_allocation(m.memory_properties.memoryTypes[a.memory_type].heapIndex, -std::int64_t(a.bytes));
   }
   a = {};
 }

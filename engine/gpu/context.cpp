@@ -355,6 +355,9 @@ void Context::reset_pass_totals() {
 
 std::uint64_t Context::allocated_bytes() const { return impl_->allocated_bytes.load(); }
 std::uint64_t Context::peak_allocated_bytes() const { return impl_->peak_bytes.load(); }
+std::uint64_t Context::allocated_bytes_in_heap(std::uint32_t heap) const {
+  return heap < impl_->heap_bytes.size() ? impl_->heap_bytes[heap].load() : 0;
+}
 
 void Context::Impl::name_object(VkObjectType type, std::uint64_t handle, const std::string& name) const {
   if (!set_object_name || name.empty()) return;
@@ -424,7 +427,8 @@ void Context::Impl::release_scratch(std::unique_ptr<RawBuffer> buffer) {
   free_scratch.emplace(buffer->bytes(), std::move(buffer));
 }
 
-void Context::Impl::note_allocation(std::int64_t delta) {
+void Context::Impl::note_allocation(std::uint32_t heap, std::int64_t delta) {
+  heap_bytes[heap].fetch_add(std::uint64_t(delta));
   const std::uint64_t now = allocated_bytes.fetch_add(std::uint64_t(delta)) + std::uint64_t(delta);
   std::uint64_t peak = peak_bytes.load();
   while (now > peak && !peak_bytes.compare_exchange_weak(peak, now)) {

@@ -60,6 +60,8 @@ class Context {
   // Device memory held by nf_gpu buffers now and at most since start (bytes).
   std::uint64_t allocated_bytes() const;
   std::uint64_t peak_allocated_bytes() const;
+  // The same in one memory heap (0 past the device's heaps): what the out-of-memory check counts.
+  std::uint64_t allocated_bytes_in_heap(std::uint32_t heap) const;
 
   struct Impl;
   Impl& impl() { return *impl_; }

@@ -1,5 +1,6 @@
 #pragma once
 // Private to engine/gpu: the Vulkan state behind Context, Buffer, Kernel and Stream.
+#include <array>
 #include <atomic>
 #include <functional>
 #include <map>
@@ -71,8 +72,10 @@ struct Context::Impl {
   std::atomic<std::uint64_t> submits{0};
   std::atomic<bool> device_lost{false};  // after VK_ERROR_DEVICE_LOST nothing more is submitted
 
-  std::atomic<std::uint64_t> allocated_bytes{0};
+  std::atomic<std::uint64_t> allocated_bytes{0};  // all heaps: what nf_gpu reports as its memory
   std::atomic<std::uint64_t> peak_bytes{0};
+  // Per memory heap: a discrete GPU's device-local and host heaps are separate budgets.
+  std::array<std::atomic<std::uint64_t>, VK_MAX_MEMORY_HEAPS> heap_bytes{};
 
   std::mutex scratch_mutex;
   std::multimap<std::uint64_t, std::unique_ptr<RawBuffer>> free_scratch;  // by capacity
@@ -84,7 +87,7 @@ struct Context::Impl {
   void run_immediate(const std::function<void(VkCommandBuffer)>& record);
   std::unique_ptr<RawBuffer> acquire_scratch(std::uint64_t bytes);
   void release_scratch(std::unique_ptr<RawBuffer> buffer);
-  void note_allocation(std::int64_t delta);
+  void note_allocation(std::uint32_t heap, std::int64_t delta);
 };
 
 // Builds the description of one physical device (no logical device needed).

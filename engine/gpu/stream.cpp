@@ -22,9 +22,11 @@ struct Access {
 };
 
 // A range must lie inside its buffer, or its descriptor would reach past the allocation.
-void check_inside(const BufferRange& r, const std::string& what) {
+// `describe` names the range; it is called only to write an error (dispatches are a hot path).
+template <class Describe>
+void check_inside(const BufferRange& r, const Describe& describe) {
   if (r.size && r.buffer && r.offset + r.size > r.buffer->bytes())
-    throw InternalError(what + ": range [" + std::to_string(r.offset) + ", " + std::to_string(r.offset + r.size) +
+    throw InternalError(std::string(describe()) + ": range [" + std::to_string(r.offset) + ", " + std::to_string(r.offset + r.size) +
                         ") lies outside buffer '" + r.buffer->name() + "' of " + std::to_string(r.buffer->bytes()) +
                         " bytes");
 }
@@ -243,18 +245,18 @@ void Stream::record_dispatch(const Kernel& kernel, const BufferRange* bindings, 
       continue;
     }
     if (!r.buffer) throw InternalError("kernel '" + kernel.name() + "': binding " + std::to_string(b) + " is null");
-    check_inside(r, "kernel '" + kernel.name() + "' binding " + std::to_string(b));
-    const std::string what = "kernel '" + kernel.name() + "': binding " + std::to_string(b) + " ('" + r.buffer->name() + "')";
+    check_inside(r, [&] { return "kernel '" + kernel.name() + "' binding " + std::to_string(b); });
+    const auto what = [&] { return "kernel '" + kernel.name() + "': binding " + std::to_string(b) + " ('" + r.buffer->name() + "')"; };
     if (kind == BindingKind::texel) {
       constexpr std::uint64_t kTexelBytes = 16;  // RGBA32F
       if (r.size % kTexelBytes)
-        throw InternalError(what + " spans " + std::to_string(r.size) + " bytes, not a whole number of vec4 texels");
+        throw InternalError(what() + " spans " + std::to_string(r.size) + " bytes, not a whole number of vec4 texels");
       if (r.size / kTexelBytes > lim.max_texel_buffer_elements)
-        throw DeviceLimitError(what + " spans " + std::to_string(r.size / kTexelBytes) +
+        throw DeviceLimitError(what() + " spans " + std::to_string(r.size / kTexelBytes) +
                           " texels, more than the device's maxTexelBufferElements " +
                           std::to_string(lim.max_texel_buffer_elements) + "; process it in chunks");
       if (lim.min_texel_buffer_offset_alignment && r.offset % lim.min_texel_buffer_offset_alignment)
-        throw InternalError(what + " offset " + std::to_string(r.offset) +
+        throw InternalError(what() + " offset " + std::to_string(r.offset) +
                             " is not a multiple of the device's minTexelBufferOffsetAlignment " +
                             std::to_string(lim.min_texel_buffer_offset_alignment));
       texel_views[b] = s.view_of(r.buffer->handles().buffer, r.offset, r.size);
@@ -264,11 +266,11 @@ void Stream::record_dispatch(const Kernel& kernel, const BufferRange* bindings, 
       const std::uint64_t alignment =
           uniform ? lim.min_uniform_buffer_offset_alignment : lim.min_storage_buffer_offset_alignment;
       if (r.size > max_range)
-        throw DeviceLimitError(what + " spans " + std::to_string(r.size) + " bytes, more than the device's " +
+        throw DeviceLimitError(what() + " spans " + std::to_string(r.size) + " bytes, more than the device's " +
                           (uniform ? "maxUniformBufferRange " : "maxStorageBufferRange ") + std::to_string(max_range) +
                           "; process it in chunks");
       if (r.offset % alignment)
-        throw InternalError(what + " offset " + std::to_string(r.offset) + " is not a multiple of the device's " +
+        throw InternalError(what() + " offset " + std::to_string(r.offset) + " is not a multiple of the device's " +
                             (uniform ? "minUniformBufferOffsetAlignment " : "minStorageBufferOffsetAlignment ") +
                             std::to_string(alignment));
     }
@@ -319,8 +321,8 @@ void Stream::copy(BufferRange source, BufferRange destination) {
     throw InternalError("copy from '" + source.buffer->name() + "' to '" + destination.buffer->name() +
                         "': sizes differ (" + std::to_string(source.size) + " vs " + std::to_string(destination.size) + ")");
   if (source.size == 0) return;
-  check_inside(source, "copy source");
-  check_inside(destination, "copy destination");
+  check_inside(source, [] { return "copy source"; });
+  check_inside(destination, [] { return "copy destination"; });
   s.track({{source.buffer->handles().buffer, source.offset, source.offset + source.size, false},
            {destination.buffer->handles().buffer, destination.offset, destination.offset + destination.size, true}});
   VkBufferCopy region{source.offset, destination.offset, source.size};
@@ -332,7 +334,7 @@ void Stream::fill(BufferRange range, std::uint32_t value) {
   if (range.size == 0) return;
   if (range.offset % 4 || range.size % 4)
     throw InternalError("fill of '" + range.buffer->name() + "': offset and size must be multiples of 4 bytes");
-  check_inside(range, "fill");
+  check_inside(range, [] { return "fill"; });
   s.track({{range.buffer->handles().buffer, range.offset, range.offset + range.size, true}});
   vkCmdFillBuffer(s.cmd, range.buffer->handles().buffer, range.offset, range.size, value);
 }

@@ -46,7 +46,8 @@ std::string memory_advice(const Stage& stage, const StageContext& c) {
   } catch (const Error&) {
     values = json::object();
   }
-  std::string advice = "; to need less memory, lower";
+  // The same settings size the workgroup counts and binding ranges, so this serves every device limit.
+  std::string advice = "; to ask less of the device, lower";
   for (std::size_t k = 0; k < keys.size(); ++k)
     advice += std::string(k ? "," : "") + " --set " + stage.name() + "." + keys[k] +
               (values.contains(keys[k]) ? " (now " + values[keys[k]].dump() + ")" : "");

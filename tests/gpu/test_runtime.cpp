@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <numeric>
 #include <string>
+#include <vector>
 
 #include "engine/core/error.hpp"
 #include "engine/gpu/chunking.hpp"
@@ -89,6 +90,29 @@ TEST_CASE("buffers round-trip data, sub-ranges and fills, including empty buffer
   CHECK_THROWS_AS(b.range(10000, 8), InternalError);
   CHECK(ctx.allocated_bytes() > 0);
   CHECK(ctx.peak_allocated_bytes() >= ctx.allocated_bytes());
+}
+
+TEST_CASE("memory is counted per heap: the heaps add up to the total, and a buffer's bytes return when it goes") {
+  auto& ctx = test::context();
+  const auto heaps_total = [&] {
+    std::uint64_t sum = 0;
+    for (std::uint32_t h = 0; h < 32; ++h) sum += ctx.allocated_bytes_in_heap(h);
+    return sum;
+  };
+  CHECK(heaps_total() == ctx.allocated_bytes());
+  const std::uint64_t before = ctx.allocated_bytes();
+  std::vector<std::uint64_t> per_heap_before;
+  for (std::uint32_t h = 0; h < 32; ++h) per_heap_before.push_back(ctx.allocated_bytes_in_heap(h));
+  {
+    RawBuffer b(ctx, 1 << 20, "counted");
+    CHECK(ctx.allocated_bytes() >= before + (1 << 20));
+    CHECK(heaps_total() == ctx.allocated_bytes());
+    int grown = 0;
+    for (std::uint32_t h = 0; h < 32; ++h) grown += ctx.allocated_bytes_in_heap(h) >= per_heap_before[h] + (1 << 20);
+    CHECK(grown == 1);  // one heap holds it
+  }
+  CHECK(ctx.allocated_bytes() == before);
+  CHECK(heaps_total() == before);
 }
 
 TEST_CASE("an allocation larger than the device allows is refused with a clear error") {
