@@ -9,6 +9,8 @@
 #include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfStdIO.h>
+#include <ImfVersion.h>
 
 #include <algorithm>
 #include <cmath>
@@ -49,14 +51,11 @@ void check_declared_size(const std::filesystem::path& path, std::uint64_t w, std
     throw InputError(path.string() + ": declares " + size_text + " pixels in " + std::to_string(file_bytes) + " bytes: truncated or not an image");
 }
 
-// The data window from an EXR's first header, read before OpenEXR opens the file: OpenEXR allocates
-// every attribute's declared size, and sizes its decompression buffers from the data window, while
-// opening (304-byte files made it allocate and clear gigabytes). Every attribute of every header
-// (a multi-part file has several) is checked, not only those before the data window. InputError for
-// an attribute larger than the file; nullopt when the header does not say (OpenEXR then gives the
-// error).
-std::optional<std::pair<std::uint64_t, std::uint64_t>> exr_declared_size(const std::filesystem::path& path, const std::vector<char>& bytes) {
-  if (bytes.size() < 8) return std::nullopt;
+// Every attribute's declared size, in every header (a multi-part file has several), checked against
+// the file's size before OpenEXR reads the header: OpenEXR allocates an attribute of a type it does
+// not know at its declared size (a 30-byte file declared 2 GB).
+void check_exr_attribute_sizes(const std::filesystem::path& path, const std::vector<char>& bytes) {
+  if (bytes.size() < 8) return;
   const bool multipart = (std::uint8_t(bytes[5]) & 0x10) != 0;  // version flags, bit 12
   std::size_t at = 8;  // magic number and version
   const auto text = [&]() -> std::optional<std::string> {
@@ -66,42 +65,76 @@ std::optional<std::pair<std::uint64_t, std::uint64_t>> exr_declared_size(const s
     at = end + 1;
     return t;
   };
-  const auto int32 = [&](std::size_t where) {
-    std::int32_t v;
-    std::memcpy(&v, bytes.data() + where, 4);
-    return v;
-  };
-  std::optional<std::pair<std::uint64_t, std::uint64_t>> window;
-  bool window_bad = false;
   for (std::size_t attributes = 0; at < bytes.size();) {
     const std::optional<std::string> name = text();
-    if (!name) break;
+    if (!name) return;
     if (name->empty()) {  // the end of a header; a multi-part file ends with an empty header
-      if (!multipart || attributes == 0) break;
+      if (!multipart || attributes == 0) return;
       attributes = 0;
       continue;
     }
     ++attributes;
     const std::optional<std::string> type = text();
-    if (!type || at + 4 > bytes.size()) break;
-    const std::int32_t size = int32(at);
+    if (!type || at + 4 > bytes.size()) return;
+    std::int32_t size;
+    std::memcpy(&size, bytes.data() + at, 4);
     at += 4;
     if (size < 0 || at + std::size_t(size) > bytes.size())
       throw InputError(path.string() + ": EXR header attribute '" + shorten(*name, 40) + "' declares " + std::to_string(size) + " bytes, the file holds " +
                        std::to_string(bytes.size()) + ": truncated or not an EXR");
-    if (*name == "dataWindow" && *type == "box2i" && size == 16 && !window && !window_bad) {
-      const std::int64_t w = std::int64_t(int32(at + 8)) - int32(at) + 1, h = std::int64_t(int32(at + 12)) - int32(at + 4) + 1;
-      if (w <= 0 || h <= 0) window_bad = true;
-      else window = std::pair{std::uint64_t(w), std::uint64_t(h)};
-    }
     at += std::size_t(size);
   }
-  return window;
+}
+
+// The most pixel bytes one file byte can hold under an EXR compression (Imf::Compression order),
+// generously: none 1; RLE 2 bytes a run of at most 128; ZIP, PIZ (Huffman with run codes) and
+// PXR24 (zlib after 32 -> 24 bits) below zlib's 1032:1 x 4/3; B44 a 4x4 block of halves in 3 bytes
+// at best; DWA (a DCT block's DC only) as any image (check_declared_size's 8800).
+double exr_max_ratio(Imf::Compression compression) {
+  static constexpr double kRatio[] = {1, 64, 1400, 1400, 1400, 1400, 11, 11, 8800, 8800};
+  const int c = int(compression);
+  return c >= 0 && c < int(std::size(kRatio)) ? kRatio[c] : 8800;
+}
+
+// The first header, read by OpenEXR itself, checked before OpenEXR opens the file: opening sizes
+// its decompression buffers and chunk tables from the data window, so a 200-byte file declaring a
+// huge window costs (untouched) gigabytes, and under the sanitizers seconds. The window must fit
+// the file under the header's own compression and channels.
+void check_exr_header(const std::filesystem::path& path, std::uint64_t file_bytes) {
+  Imf::Header header;
+  try {
+    Imf::StdIFStream stream(path.c_str());
+    char start[8];  // the magic number and the version field, which InputFile reads before the header
+    stream.read(start, 8);
+    if (!Imf::isImfMagic(start)) throw InputError(path.string() + ": cannot read EXR (not an OpenEXR file)");
+    int version = int(std::uint32_t(std::uint8_t(start[4])) | std::uint32_t(std::uint8_t(start[5])) << 8 |
+                      std::uint32_t(std::uint8_t(start[6])) << 16 | std::uint32_t(std::uint8_t(start[7])) << 24);
+    header.readFrom(stream, version);
+  } catch (const nf::Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InputError(path.string() + ": cannot read EXR (" + e.what() + ")");
+  }
+  const Imath::Box2i window = header.dataWindow();
+  const std::int64_t w = std::int64_t(window.max.x) - window.min.x + 1, h = std::int64_t(window.max.y) - window.min.y + 1;
+  if (w <= 0 || h <= 0) throw InputError(path.string() + ": EXR data window of " + std::to_string(w) + " x " + std::to_string(h) + " pixels: empty");
+  check_declared_size(path, std::uint64_t(w), std::uint64_t(h), 1, file_bytes);
+  if (w > 65536 || h > 65536)
+    throw InputError(path.string() + ": EXR data window of " + std::to_string(w) + " x " + std::to_string(h) + " pixels: out of range");
+  double bytes_per_pixel = 0;
+  for (auto c = header.channels().begin(); c != header.channels().end(); ++c)
+    bytes_per_pixel += (c.channel().type == Imf::HALF ? 2.0 : 4.0) / std::max(1.0, double(c.channel().xSampling) * double(c.channel().ySampling));
+  const double ratio = exr_max_ratio(header.compression());
+  if (double(w) * double(h) * bytes_per_pixel > ratio * double(file_bytes) + 65536)
+    throw InputError(path.string() + ": declares " + std::to_string(w) + " x " + std::to_string(h) + " pixels of " + std::to_string(bytes_per_pixel) +
+                     " bytes, more than " + std::to_string(file_bytes) + " bytes hold under its compression (" +
+                     std::to_string(int(header.compression())) + "): truncated or not an EXR");
 }
 
 Image read_exr(const std::filesystem::path& path) {
-  if (const std::optional<std::pair<std::uint64_t, std::uint64_t>> size = exr_declared_size(path, read_file_bytes(path)))
-    check_declared_size(path, size->first, size->second, 1, std::filesystem::file_size(path));
+  const std::uint64_t file_bytes = std::filesystem::file_size(path);
+  check_exr_attribute_sizes(path, read_file_bytes(path));
+  check_exr_header(path, file_bytes);
   try {
     Imf::InputFile file(path.c_str());
     const Imath::Box2i window = file.header().dataWindow();
@@ -114,7 +147,7 @@ Image read_exr(const std::filesystem::path& path) {
       for (auto it = file.header().channels().begin(); it != file.header().channels().end() && names.empty(); ++it)
         names.emplace_back(it.name());  // a single-channel image: Z, Y, depth...
     if (names.empty()) throw InputError(path.string() + ": EXR without channels");
-    check_declared_size(path, std::uint64_t(w), std::uint64_t(h), names.size(), std::filesystem::file_size(path));
+    check_declared_size(path, std::uint64_t(w), std::uint64_t(h), names.size(), file_bytes);
     Image img;
     img.width = std::uint32_t(w), img.height = std::uint32_t(h), img.channels = std::uint32_t(names.size());
     img.pixels.assign(std::size_t(w) * std::size_t(h) * names.size(), 0.f);
