@@ -132,7 +132,7 @@ RawBuffer::RawBuffer(Context& context, std::uint64_t bytes, std::string name)
   const bool want_mapped = m.tuning.mapped_device_buffers;
   Allocation a = want_mapped ? allocate(m, bytes, device_local | kHostMemory, kHostMemory, name_)
                              : allocate(m, bytes, device_local, 0, name_);
-  handles_ = new Handles{a.buffer, a.memory, a.bytes};
+  handles_ = new Handles{a.buffer, a.memory, a.bytes, a.memory_type};
   const VkMemoryPropertyFlags got = m.memory_properties.memoryTypes[a.memory_type].propertyFlags;
   if (want_mapped && (got & kHostMemory) == kHostMemory) {
     try {
@@ -150,7 +150,7 @@ void RawBuffer::release() {
   if (!handles_) return;
   Context::Impl& m = context_->impl();
   if (mapped_) vkUnmapMemory(m.device, handles_->memory);
-  Allocation a{handles_->buffer, handles_->memory, handles_->allocation_bytes};
+  Allocation a{handles_->buffer, handles_->memory, handles_->allocation_bytes, handles_->memory_type};
   free_allocation(m, a);
   delete handles_;
   handles_ = nullptr;

@@ -20,6 +20,7 @@ struct RawBuffer::Handles {
   VkBuffer buffer = VK_NULL_HANDLE;
   VkDeviceMemory memory = VK_NULL_HANDLE;
   std::uint64_t allocation_bytes = 0;
+  std::uint32_t memory_type = 0;  // its heap's count is lowered when it is freed
 };
 
 struct Kernel::Handles {

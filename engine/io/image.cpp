@@ -82,6 +82,17 @@ void check_exr_attribute_sizes(const std::filesystem::path& path, const std::vec
     if (size < 0 || at + std::size_t(size) > bytes.size())
       throw InputError(path.string() + ": EXR header attribute '" + shorten(*name, 40) + "' declares " + std::to_string(size) + " bytes, the file holds " +
                        std::to_string(bytes.size()) + ": truncated or not an EXR");
+    if (*type == "chlist") {
+      // OpenEXR reads a channel list by its entries (a name, 16 bytes) up to an empty name, not by
+      // its declared size: the two must agree, or the attributes OpenEXR reads next are not these.
+      std::size_t end = at;
+      while (end < bytes.size() && bytes[end] != '\0') {
+        end = std::size_t(std::find(bytes.begin() + std::ptrdiff_t(end), bytes.end(), '\0') - bytes.begin()) + 17;
+      }
+      if (end + 1 != at + std::size_t(size))
+        throw InputError(path.string() + ": EXR channel list declares " + std::to_string(size) + " bytes and holds " +
+                         (end < bytes.size() ? std::to_string(end + 1 - at) : std::string("more")) + ": corrupt EXR header");
+    }
     at += std::size_t(size);
   }
 }
@@ -89,11 +100,12 @@ void check_exr_attribute_sizes(const std::filesystem::path& path, const std::vec
 // The most pixel bytes one file byte can hold under an EXR compression (Imf::Compression order),
 // generously: none 1; RLE 2 bytes a run of at most 128; ZIP, PIZ (Huffman with run codes) and
 // PXR24 (zlib after 32 -> 24 bits) below zlib's 1032:1 x 4/3; B44 a 4x4 block of halves in 3 bytes
-// at best; DWA (a DCT block's DC only) as any image (check_declared_size's 8800).
+// at best. 0: no bound beyond check_declared_size's (DWA: a flat 8x8 block is one DC value,
+// deflated, so a black image packs far past any of these).
 double exr_max_ratio(Imf::Compression compression) {
-  static constexpr double kRatio[] = {1, 64, 1400, 1400, 1400, 1400, 11, 11, 8800, 8800};
+  static constexpr double kRatio[] = {1, 64, 1400, 1400, 1400, 1400, 11, 11};
   const int c = int(compression);
-  return c >= 0 && c < int(std::size(kRatio)) ? kRatio[c] : 8800;
+  return c >= 0 && c < int(std::size(kRatio)) ? kRatio[c] : 0;
 }
 
 // The first header, read by OpenEXR itself, checked before OpenEXR opens the file: opening sizes
@@ -125,15 +137,16 @@ void check_exr_header(const std::filesystem::path& path, std::uint64_t file_byte
   for (auto c = header.channels().begin(); c != header.channels().end(); ++c)
     bytes_per_pixel += (c.channel().type == Imf::HALF ? 2.0 : 4.0) / std::max(1.0, double(c.channel().xSampling) * double(c.channel().ySampling));
   const double ratio = exr_max_ratio(header.compression());
-  if (double(w) * double(h) * bytes_per_pixel > ratio * double(file_bytes) + 65536)
+  if (ratio > 0 && double(w) * double(h) * bytes_per_pixel > ratio * double(file_bytes) + 65536)
     throw InputError(path.string() + ": declares " + std::to_string(w) + " x " + std::to_string(h) + " pixels of " + std::to_string(bytes_per_pixel) +
                      " bytes, more than " + std::to_string(file_bytes) + " bytes hold under its compression (" +
                      std::to_string(int(header.compression())) + "): truncated or not an EXR");
 }
 
 Image read_exr(const std::filesystem::path& path) {
-  const std::uint64_t file_bytes = std::filesystem::file_size(path);
-  check_exr_attribute_sizes(path, read_file_bytes(path));
+  const std::vector<char> bytes = read_file_bytes(path);  // InputError naming the file when it cannot be read
+  const std::uint64_t file_bytes = bytes.size();
+  check_exr_attribute_sizes(path, bytes);
   check_exr_header(path, file_bytes);
   try {
     Imf::InputFile file(path.c_str());

@@ -113,6 +113,15 @@ TEST_CASE("memory is counted per heap: the heaps add up to the total, and a buff
   }
   CHECK(ctx.allocated_bytes() == before);
   CHECK(heaps_total() == before);
+  for (std::uint32_t h = 0; h < 32; ++h) CHECK(ctx.allocated_bytes_in_heap(h) == per_heap_before[h]);  // freed from its own heap
+  // A device-local buffer and a host-visible transfer (staging where the device needs it): every
+  // heap's count comes back.
+  {
+    const std::vector<float> values(4096, 1.5f);
+    Buffer<float> b(ctx, std::span<const float>(values), "counted upload");
+    CHECK(b.download() == values);
+  }
+  for (std::uint32_t h = 0; h < 32; ++h) CHECK(ctx.allocated_bytes_in_heap(h) == per_heap_before[h]);
 }
 
 TEST_CASE("an allocation larger than the device allows is refused with a clear error") {

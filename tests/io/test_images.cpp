@@ -95,9 +95,10 @@ TEST_CASE("an image header declaring more pixels than its file holds is refused 
   CHECK_THROWS_WITH_AS(read_image(fs::path(NF_TEST_DATA) / "huge_window.exr"), doctest::Contains("bytes: truncated or not an image"), InputError);
   // The campaign's next one (11 s under the sanitizers): a channel list declaring more bytes than
   // it holds, which OpenEXR reads by its structure, so the data window it then finds is not where a
-  // walk by declared sizes looks. The window is now taken from OpenEXR's own reading of the header.
+  // walk by declared sizes looks. Now the list must hold what it declares, and the window is taken
+  // from OpenEXR's own reading of the header.
   CHECK_THROWS_WITH_AS(read_image(fs::path(NF_TEST_DATA) / "window_after_long_chlist.exr"),
-                       doctest::Contains("declares 33030146 x 1 pixels in 198 bytes: truncated or not an image"), InputError);
+                       doctest::Contains("EXR channel list declares 51 bytes and holds 19: corrupt EXR header"), InputError);
   // An EXR header attribute declaring 2 GB in a 30-byte file (OpenEXR would allocate it first).
   const fs::path exr = fs::temp_directory_path() / "nf_test_huge_attribute.exr";
   std::ofstream(exr, std::ios::binary) << std::string("\x76\x2f\x31\x01\x02\x00\x00\x00", 8) << std::string("channels\0chlist\0", 16)
