@@ -129,7 +129,9 @@ json run_fur_suite(gpu::Context& ctx, const Options& options) {
       q.insert(q.end(), {v.x, v.y, v.z});
     }
     gpu::Buffer<float> d_queries(ctx, q, "queries");
-    const fur::ChamferGrid grid = fur::chamfer_grid(glm::vec3(-0.7f), glm::vec3(0.7f), 64);
+    // The fur stage's choice of grid: the sphere's area, the batch's points, an eighth of the box.
+    const fur::ChamferGrid grid = fur::chamfer_grid_for(glm::vec3(-0.7f), glm::vec3(0.7f), std::uint64_t(strands) * 100,
+                                                        4.0 * 3.14159265358979 * 0.25, 1.4 / 8);
     fur::StrandChamferScratch scratch(ctx, std::uint64_t(strands) * 100, queries, grid);
     fur::ChamferValue value;
     const Timing t = time_repeats(repeats, nullptr, [&] {
@@ -148,7 +150,7 @@ json run_fur_suite(gpu::Context& ctx, const Options& options) {
       const std::vector<float> one(q.begin() + std::ptrdiff_t(3 * k), q.begin() + std::ptrdiff_t(3 * k + 3));
       wrong += fur::nearest_points_ref(one, p, grid.reach())[0] != nn[k];
     }
-    records.push_back(make_record(ctx, kSuite, "strand_chamfer", {{"strand_points", std::uint64_t(strands) * 100}, {"queries", queries}, {"cells", 64}}, t,
+    records.push_back(make_record(ctx, kSuite, "strand_chamfer", {{"strand_points", std::uint64_t(strands) * 100}, {"queries", queries}, {"cells", grid.dims[0]}, {"rings", grid.max_rings}}, t,
                                   {{"queries_per_second", double(queries) / t.median()}, {"loss", value.loss},
                                    {"unmatched", value.unmatched}, {"sampled_queries", checked}, {"wrong_nearest", wrong}}));
   }

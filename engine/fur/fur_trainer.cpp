@@ -130,7 +130,10 @@ struct FurTrainer::Impl {
         rasterizer(c),
         loss_shape{batch.strands, kStrandPoints},
         loss_scratch(c, loss_shape),
-        chamfer_grid(fur::chamfer_grid(d.lo, d.hi, 64)),
+        // Cells from the fur's area and the batch's points; the reach of the earlier fixed grid
+        // (64 cells, 8 rings: an eighth of the box) kept.
+        chamfer_grid(fur::chamfer_grid_for(d.lo, d.hi, std::uint64_t(batch.strands) * kStrandPoints, d.fur_area,
+                                           double(std::max({d.hi.x - d.lo.x, d.hi.y - d.lo.y, d.hi.z - d.lo.z})) / 8)),
         chamfer_queries(std::min<std::uint64_t>(o.chamfer_queries, d.surface_points.size() / 3)),
         chamfer_scratch(c, std::uint64_t(batch.strands) * kStrandPoints, std::max<std::uint64_t>(1, chamfer_queries), chamfer_grid),
         guides(c, std::uint64_t(batch.strands) * 3, "fur guides"),

@@ -8,6 +8,7 @@
 #include "engine/gpu/context.hpp"
 #include "engine/gpu/kernel.hpp"
 #include "engine/gpu/radix_sort.hpp"
+#include "engine/gpu/scan.hpp"
 
 namespace nf::fur {
 namespace {
@@ -21,10 +22,9 @@ struct GridPush {
 struct CountPush {
   std::uint32_t count;
 };
-struct GatherPush {
+struct ScatterPush {
   std::uint32_t count;
   float scale;
-  std::uint32_t accumulate;
 };
 
 GridPush grid_push(const ChamferGrid& g, std::uint64_t count) {
@@ -51,13 +51,27 @@ ChamferGrid chamfer_grid(glm::vec3 lo, glm::vec3 hi, int cells) {
   return g;
 }
 
+ChamferGrid chamfer_grid_for(glm::vec3 lo, glm::vec3 hi, std::uint64_t points, double area, double reach) {
+  const glm::vec3 e = hi - lo;
+  const double longest = std::max({e.x, e.y, e.z});
+  int cells = 64;
+  if (area > 0 && std::isfinite(area) && points > 0 && longest > 0) {
+    constexpr double kPointsPerCell = 100;
+    const double cell = std::sqrt(kPointsPerCell * area / double(points));
+    cells = int(std::clamp(std::ceil(longest / cell), 16.0, 256.0));
+  }
+  ChamferGrid g = chamfer_grid(lo, hi, cells);
+  if (reach > 0 && std::isfinite(reach)) g.max_rings = int(std::clamp(std::ceil(reach / double(g.cell)), 4.0, 32.0));
+  return g;
+}
+
 StrandChamferScratch::StrandChamferScratch(gpu::Context& context, std::uint64_t points_, std::uint64_t queries_, const ChamferGrid& grid)
     : points(points_), queries(queries_),
-      point_keys(context, points_, "chamfer point cells"), point_ids(context, points_, "chamfer point ids"),
-      cell_start(context, grid.cell_count(), "chamfer cell starts"), cell_end(context, grid.cell_count(), "chamfer cell ends"),
+      point_cells(context, points_, "chamfer point cells"), point_slots(context, points_, "chamfer point slots"),
+      cell_start(context, grid.cell_count(), "chamfer cell starts"), cell_count(context, grid.cell_count(), "chamfer cell counts"),
       nearest(context, queries_, "chamfer nearest points"), query_keys(context, queries_, "chamfer query keys"),
-      query_ids(context, queries_, "chamfer query ids"), point_start(context, points_, "chamfer point starts"),
-      point_end(context, points_, "chamfer point ends"), dist2(context, queries_, "chamfer squared distances") {
+      query_ids(context, queries_, "chamfer query ids"), dist2(context, queries_, "chamfer squared distances"),
+      records(context, points_ * 4, "chamfer points by cell") {
   require_count(points_, "strand points");
   require_count(queries_, "query points");
 }
@@ -67,16 +81,20 @@ void strand_chamfer_forward(gpu::Stream& stream, const ChamferGrid& grid, gpu::B
   gpu::require_bytes(points, s.points * 12, "strand points");
   gpu::require_bytes(queries, s.queries * 12, "chamfer queries");
   gpu::Context& context = stream.context();
-  stream.dispatch(context.kernel("fur/chamfer_cell_keys", {{0, 128}}), {points, s.point_keys, s.point_ids}, grid_push(grid, s.points),
-                  gpu::Elements(s.points));
-  gpu::radix_sort(stream, s.point_keys, s.point_ids, gpu::key_bits_for(grid.cell_count() - 1));
-  stream.fill(s.cell_start, 0);
-  stream.fill(s.cell_end, 0);
-  stream.dispatch(context.kernel("fur/chamfer_ranges", {{0, 128}}), {s.point_keys, s.cell_start, s.cell_end},
-                  CountPush{std::uint32_t(s.points)}, gpu::Elements(s.points));
-  stream.dispatch(context.kernel("fur/chamfer_query", {{0, 64}}),
-                  {queries, points, s.point_ids, s.cell_start, s.cell_end, s.nearest, s.dist2}, grid_push(grid, s.queries),
-                  gpu::Elements(s.queries));
+  {
+    // A counting sort (atomic slots, one scan of the cells): two passes over the points where a
+    // radix sort of their cell keys took five, each with its own scan.
+    gpu::ScopedPass pass(stream, "fur/chamfer_grid");
+    stream.fill(s.cell_count, 0);
+    stream.dispatch(context.kernel("fur/chamfer_cell_count", {{0, 128}}), {points, s.point_cells, s.point_slots, s.cell_count},
+                    grid_push(grid, s.points), gpu::Elements(s.points));
+    gpu::exclusive_scan(stream, s.cell_count, s.cell_start);
+    stream.dispatch(context.kernel("fur/chamfer_sorted_points", {{0, 128}}), {points, s.point_cells, s.point_slots, s.cell_start, s.records},
+                    CountPush{std::uint32_t(s.points)}, gpu::Elements(s.points));
+  }
+  gpu::ScopedPass pass(stream, "fur/chamfer_query");
+  stream.dispatch(context.kernel("fur/chamfer_query", {{0, 64}}), {queries, s.records, s.cell_start, s.cell_count, s.nearest, s.dist2},
+                  grid_push(grid, s.queries), gpu::Elements(s.queries));
 }
 
 ChamferValue strand_chamfer_value(const StrandChamferScratch& s) {
@@ -92,17 +110,16 @@ void strand_chamfer_backward(gpu::Stream& stream, gpu::BufferRange queries, gpu:
                              double weight, gpu::BufferRange grad_points, bool accumulate) {
   gpu::require_bytes(grad_points, s.points * 12, "strand point gradients");
   gpu::Context& context = stream.context();
+  gpu::ScopedPass pass(stream, "fur/chamfer_backward");
+  if (!accumulate) stream.fill(grad_points, 0);
   stream.copy(s.nearest, s.query_keys);
   stream.dispatch(context.kernel("fur/chamfer_iota", {{0, 128}}), {s.query_ids}, CountPush{std::uint32_t(s.queries)},
                   gpu::Elements(s.queries));
-  gpu::radix_sort(stream, s.query_keys, s.query_ids, 32);  // unmatched queries (key ~0u) sort last and own no range
-  stream.fill(s.point_start, 0);
-  stream.fill(s.point_end, 0);
-  stream.dispatch(context.kernel("fur/chamfer_ranges", {{0, 128}}), {s.query_keys, s.point_start, s.point_end},
-                  CountPush{std::uint32_t(s.queries)}, gpu::Elements(s.queries));
-  const GatherPush push{std::uint32_t(s.points), float(2.0 * weight / double(s.queries)), accumulate ? 1u : 0u};
-  stream.dispatch(context.kernel("fur/chamfer_gather", {{0, 128}}),
-                  {queries, points, s.query_ids, s.point_start, s.point_end, grad_points}, push, gpu::Elements(s.points));
+  // Only the bits a point index needs; unmatched queries (key ~0u) keep theirs and sort last.
+  gpu::radix_sort(stream, s.query_keys, s.query_ids, s.points >= 0xffffffffull ? 32 : gpu::key_bits_for(std::uint32_t(s.points)));
+  const ScatterPush push{std::uint32_t(s.queries), float(2.0 * weight / double(s.queries))};
+  stream.dispatch(context.kernel("fur/chamfer_scatter", {{0, 128}}), {queries, points, s.query_keys, s.query_ids, grad_points}, push,
+                  gpu::Elements(s.queries));
 }
 
 namespace {

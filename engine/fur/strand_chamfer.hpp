@@ -1,10 +1,10 @@
 #pragma once
 // The fur stage's one-way chamfer on the GPU (maths: strand_chamfer_ref.hpp): points sampled on
 // M_NeuS find their nearest strand point through a uniform grid of cells rebuilt every step (a
-// radix sort of the strand points by cell, each cell's range, then a ring search per query that
+// counting sort of the strand points by cell, then a ring search per query that
 // stops once no farther cell can hold a closer point: exact, ties to the lowest index). The adjoint
-// is a gather: the queries sorted by their nearest point, each point summing its own range, so no
-// float atomics and a deterministic result. Shaders: shaders/fur/chamfer_*.comp.
+// sorts the queries by their nearest point and the first query of each run sums the run into that
+// point's gradient, so no float atomics and a deterministic result. Shaders: shaders/fur/chamfer_*.comp.
 #include <array>
 #include <span>
 #include <vector>
@@ -33,12 +33,17 @@ struct ChamferGrid {
 };
 // InputError for an empty or non-finite box or cells outside 1..256.
 ChamferGrid chamfer_grid(glm::vec3 lo, glm::vec3 hi, int cells = 64);
+// The grid for `points` strand points over a fur of `area` (scene units squared) in the box: cells
+// holding about 100 points where the fur is (a query then walks one cell, or its 27 neighbours,
+// of short runs; measured fastest on lavapipe against 230 and 60), 16..256 along the longest side,
+// and as many rings as keep `reach` (clamped to 4..32 rings). With no area: 64 cells.
+ChamferGrid chamfer_grid_for(glm::vec3 lo, glm::vec3 hi, std::uint64_t points, double area, double reach);
 
 struct StrandChamferScratch {
   StrandChamferScratch(gpu::Context& context, std::uint64_t points, std::uint64_t queries, const ChamferGrid& grid);
   std::uint64_t points, queries;
-  gpu::Buffer<std::uint32_t> point_keys, point_ids, cell_start, cell_end, nearest, query_keys, query_ids, point_start, point_end;
-  gpu::Buffer<float> dist2;
+  gpu::Buffer<std::uint32_t> point_cells, point_slots, cell_start, cell_count, nearest, query_keys, query_ids;
+  gpu::Buffer<float> dist2, records;  // records: the points in cell order, x y z and the index's bits
 };
 
 // Records the nearest strand point and squared distance of every query (queries: K x 3, points:

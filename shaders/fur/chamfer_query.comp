@@ -2,7 +2,9 @@
 #extension GL_GOOGLE_include_directive : require
 // Each query's nearest strand point by a ring search over the grid of cells: rings of cells at
 // Chebyshev distance r = 0, 1, ..., max_rings around the query's cell, stopping once the best
-// distance is within r cells (every point of a farther ring is farther), so a match is exact. A
+// distance is below r cells plus the query's distance to its own cell's nearest wall (every point
+// of a farther ring is at least that far), so a match is exact and a query whose nearest point
+// lies in its own cell, well inside it, visits that cell alone. A
 // query whose nearest point lies farther than max_rings cells is unmatched (nearest = ~0u, dist2 =
 // 0). The bound also keeps each invocation's loops short: lavapipe ends loops past 65,535
 // iterations without an error (docs/gpu-runtime.md); a query that had to search 20 rings of a 32^3
@@ -14,12 +16,11 @@ layout(local_size_x_id = 0) in;
 #include "nf_index.glsl"
 
 layout(std430, binding = 0) readonly buffer Queries { float queries[]; };
-layout(std430, binding = 1) readonly buffer Points { float points[]; };
-layout(std430, binding = 2) readonly buffer Sorted { uint sorted_ids[]; };  // point indices by cell
-layout(std430, binding = 3) readonly buffer Start { uint start[]; };
-layout(std430, binding = 4) readonly buffer End { uint end_[]; };
-layout(std430, binding = 5) writeonly buffer Nearest { uint nearest[]; };
-layout(std430, binding = 6) writeonly buffer Dist2 { float dist2[]; };
+layout(std430, binding = 1) readonly buffer Records { vec4 records[]; };  // points by cell, index in w
+layout(std430, binding = 2) readonly buffer Start { uint start[]; };
+layout(std430, binding = 3) readonly buffer Counts { uint counts[]; };
+layout(std430, binding = 4) writeonly buffer Nearest { uint nearest[]; };
+layout(std430, binding = 5) writeonly buffer Dist2 { float dist2[]; };
 
 layout(push_constant) uniform Push {
   uint count;
@@ -36,14 +37,17 @@ vec3 x;
 void visit(int cx, int cy, int cz) {
   if (cx < 0 || cx >= pc.nx || cy < 0 || cy >= pc.ny || cz < 0 || cz >= pc.nz) return;
   const uint cell = (uint(cz) * uint(pc.ny) + uint(cy)) * uint(pc.nx) + uint(cx);
-  const uint e = end_[cell];
-  for (uint i = start[cell]; i < e; ++i) {
-    const uint j = sorted_ids[i];
-    const vec3 d = x - vec3(points[3u * j], points[3u * j + 1u], points[3u * j + 2u]);
+  const uint first = start[cell], e = first + counts[cell];
+  for (uint i = first; i < e; ++i) {
+    const vec4 record = records[i];
+    const vec3 d = x - record.xyz;
     const float d2 = dot(d, d);
-    if (d2 < best || (d2 == best && j < best_id)) {
-      best = d2;
-      best_id = j;
+    if (d2 <= best) {
+      const uint j = floatBitsToUint(record.w);
+      if (d2 < best || j < best_id) {
+        best = d2;
+        best_id = j;
+      }
     }
   }
 }
@@ -55,6 +59,12 @@ void main() {
   const ivec3 dims = ivec3(pc.nx, pc.ny, pc.nz);
   const ivec3 c = clamp(ivec3(floor((x - vec3(pc.ox, pc.oy, pc.oz)) / pc.cell)), ivec3(0), dims - 1);
   const int rings = min(pc.max_rings, max(max(pc.nx, pc.ny), pc.nz));
+  // How far the query lies inside its own cell: a point outside the cube of rings 0..r is at least
+  // r cells plus this far away. Clamped to 0 on an axis where the query lies outside the grid, and
+  // shortened by a little so that a point that floor() put in the next cell is still covered.
+  const vec3 lo = vec3(pc.ox, pc.oy, pc.oz) + vec3(c) * pc.cell;
+  const vec3 wall = max(min(x - lo, lo + pc.cell - x), vec3(0.0));
+  const float inner = max(min(min(wall.x, wall.y), wall.z) - 1e-4 * pc.cell, 0.0);
   best = uintBitsToFloat(0x7f800000u);  // +inf
   best_id = 0xffffffffu;
   for (int r = 0; r <= rings; ++r) {
@@ -67,7 +77,8 @@ void main() {
           visit(c.x + r, c.y + dy, c.z + dz);
         }
       }
-    if (best_id != 0xffffffffu && best <= float(r) * pc.cell * float(r) * pc.cell) break;
+    const float bound = float(r) * pc.cell + inner;
+    if (best_id != 0xffffffffu && best < bound * bound) break;
   }
   const float reach = float(pc.max_rings) * pc.cell;
   const bool matched = best_id != 0xffffffffu && best <= reach * reach;

@@ -1,7 +1,8 @@
 // The one-way chamfer (engine/fur/strand_chamfer.*): the grid search finds exactly the brute-force
 // nearest points (ties to the lowest index) on coarse, fine and sparse grids and for points outside
-// the grid, and leaves unmatched exactly the queries beyond its reach; refusals. Its gradients are
-// in the gradcheck catalog.
+// the grid, and leaves unmatched exactly the queries beyond its reach; the fur stage's choice of
+// grid; a point nearest to thousands of queries; refusals. Its gradients are in the gradcheck
+// catalog.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -47,7 +48,10 @@ TEST_CASE("strand chamfer: a fur-stage batch (1.5 M strand points, 20,000 querie
     return v;
   };
   const std::vector<float> points = on_sphere(1500000, 0.5f), queries = on_sphere(20000, 0.52f);
-  const ChamferGrid grid = chamfer_grid(glm::vec3(-0.6f), glm::vec3(0.6f), 64);
+  // The fur stage's grid: cells from the shell's area (about 100 points a cell), an eighth of the box's reach.
+  const ChamferGrid grid = chamfer_grid_for(glm::vec3(-0.6f), glm::vec3(0.6f), 1500000, 4.0 * 3.14159265358979 * 0.25, 1.2 / 8);
+  CHECK(grid.dims[0] == 83);  // ceil(1.2 / sqrt(100 pi / 1.5e6))
+  CHECK(grid.reach() >= 1.2 / 8);
   const std::vector<std::uint32_t> nn = strand_chamfer_nearest(test::context(), grid, queries, points);
   // The brute force on a sample of the queries.
   for (std::size_t k = 0; k < 20000; k += 997) {
@@ -60,6 +64,42 @@ TEST_CASE("strand chamfer: a fur-stage batch (1.5 M strand points, 20,000 querie
   for (std::size_t j = 0; j < grad.size(); j += 3) pulled += grad[j] != 0.f || grad[j + 1] != 0.f || grad[j + 2] != 0.f;
   CHECK(pulled > 0);
   CHECK(pulled <= 20000);
+}
+
+TEST_CASE("strand chamfer: ties go to the lowest index, whichever cell walls the query sits on") {
+  // A lattice of points (every value exact in binary) in shuffled order, queries on the lattice's
+  // cell centres, faces and edges: 8, 4 or 2 points at exactly the same distance, found across
+  // grid cells whose walls pass through, beside or between them.
+  std::vector<glm::vec3> lattice;
+  for (int x = -4; x <= 4; ++x)
+    for (int y = -4; y <= 4; ++y)
+      for (int z = -4; z <= 4; ++z) lattice.push_back(0.25f * glm::vec3(x, y, z));
+  std::shuffle(lattice.begin(), lattice.end(), std::mt19937(9));
+  std::vector<float> points, queries;
+  for (const glm::vec3& p : lattice) points.insert(points.end(), {p.x, p.y, p.z});
+  for (int x = -3; x <= 3; ++x)
+    for (int y = -3; y <= 3; ++y)
+      for (const glm::vec3 off : {glm::vec3(0.125f), glm::vec3(0.125f, 0.125f, 0.f), glm::vec3(0.125f, 0.f, 0.f)})
+        queries.insert(queries.end(), {0.25f * float(x) + off.x, 0.25f * float(y) + off.y, 0.25f * float(((x + y) % 3 + 3) % 3 - 1) + off.z});
+  for (const int cells : {2, 8, 16, 24}) {
+    CAPTURE(cells);
+    const ChamferGrid grid = chamfer_grid(glm::vec3(-1.f), glm::vec3(1.f), cells);
+    CHECK(strand_chamfer_nearest(test::context(), grid, queries, points) == nearest_points_ref(queries, points, grid.reach()));
+  }
+}
+
+TEST_CASE("strand chamfer: a point nearest to thousands of queries gets their whole gradient") {
+  // 10,000 queries around one point: its run of the sorted queries spans several of the adjoint's
+  // 4,096-query chunks.
+  const std::vector<float> points{0.f, 0.f, 0.f, 0.9f, 0.9f, 0.9f, -0.9f, 0.9f, 0.f};
+  const std::vector<float> queries = test::random_f32(3 * 10000, 4, 0.05f, 0.15f);
+  const ChamferGrid grid = chamfer_grid(glm::vec3(-1.f), glm::vec3(1.f), 16);
+  const std::vector<float> grad = strand_chamfer_gradient(test::context(), grid, queries, points, 3.0);
+  const std::vector<double> ref = strand_chamfer_backward_ref(std::vector<double>(queries.begin(), queries.end()),
+                                                              std::vector<double>(points.begin(), points.end()), grid.reach(), 3.0);
+  REQUIRE(grad.size() == ref.size());
+  for (std::size_t i = 0; i < grad.size(); ++i) CHECK(grad[i] == doctest::Approx(ref[i]).epsilon(1e-3));
+  for (std::size_t i = 3; i < grad.size(); ++i) CHECK(grad[i] == 0.f);
 }
 
 TEST_CASE("strand chamfer refuses empty, non-finite and badly shaped input") {
