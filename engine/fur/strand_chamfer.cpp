@@ -54,14 +54,16 @@ ChamferGrid chamfer_grid(glm::vec3 lo, glm::vec3 hi, int cells) {
 ChamferGrid chamfer_grid_for(glm::vec3 lo, glm::vec3 hi, std::uint64_t points, double area, double reach) {
   const glm::vec3 e = hi - lo;
   const double longest = std::max({e.x, e.y, e.z});
+  const bool has_reach = reach > 0 && std::isfinite(reach);
   int cells = 64;
   if (area > 0 && std::isfinite(area) && points > 0 && longest > 0) {
     constexpr double kPointsPerCell = 100;
     const double cell = std::sqrt(kPointsPerCell * area / double(points));
     cells = int(std::clamp(std::ceil(longest / cell), 16.0, 256.0));
   }
+  if (has_reach && longest > 0) cells = std::clamp(int(std::floor(kMaxChamferRings * longest / reach)), 1, cells);
   ChamferGrid g = chamfer_grid(lo, hi, cells);
-  if (reach > 0 && std::isfinite(reach)) g.max_rings = int(std::clamp(std::ceil(reach / double(g.cell)), 4.0, 32.0));
+  g.max_rings = has_reach ? int(std::clamp(std::ceil(reach / double(g.cell)), 4.0, double(kMaxChamferRings))) : 8;
   return g;
 }
 
@@ -74,6 +76,11 @@ StrandChamferScratch::StrandChamferScratch(gpu::Context& context, std::uint64_t 
       records(context, points_ * 4, "chamfer points by cell") {
   require_count(points_, "strand points");
   require_count(queries_, "query points");
+  if (queries_ > kMaxChamferQueries)
+    throw InputError("strand chamfer: " + std::to_string(queries_) + " query points, at most " + std::to_string(kMaxChamferQueries) +
+                     " (fur.chamfer_queries)");
+  if (grid.max_rings < 0 || grid.max_rings > kMaxChamferRings)
+    throw InputError("strand chamfer: " + std::to_string(grid.max_rings) + " rings, at most " + std::to_string(kMaxChamferRings));
 }
 
 void strand_chamfer_forward(gpu::Stream& stream, const ChamferGrid& grid, gpu::BufferRange queries, gpu::BufferRange points,
@@ -111,7 +118,7 @@ void strand_chamfer_backward(gpu::Stream& stream, gpu::BufferRange queries, gpu:
   gpu::require_bytes(grad_points, s.points * 12, "strand point gradients");
   gpu::Context& context = stream.context();
   gpu::ScopedPass pass(stream, "fur/chamfer_backward");
-  if (!accumulate) stream.fill(grad_points, 0);
+  if (!accumulate) stream.fill(gpu::BufferRange{grad_points.buffer, grad_points.offset, s.points * 12}, 0);
   stream.copy(s.nearest, s.query_keys);
   stream.dispatch(context.kernel("fur/chamfer_iota", {{0, 128}}), {s.query_ids}, CountPush{std::uint32_t(s.queries)},
                   gpu::Elements(s.queries));

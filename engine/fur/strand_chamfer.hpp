@@ -21,8 +21,9 @@ namespace nf::fur {
 // longest fur). Points outside are searched from the border cells, still exactly. A query is
 // matched when a strand point lies within max_rings cells (reach()); the fur stage picks the cell
 // so that strands near the skin are well inside that reach. Cells should hold a few hundred points
-// at most: on lavapipe a query's loop over the points of the cells it visits must stay below
-// 65,535 iterations (docs/gpu-runtime.md); 1.5 M points in a 64-cell grid is tested.
+// at most and max_rings stay at most kMaxChamferRings: on lavapipe all of a query's loops together
+// must stay below 65,535 iterations (docs/gpu-runtime.md); 1.5 M points on the fur stage's grid is
+// tested.
 struct ChamferGrid {
   std::array<std::int32_t, 3> dims{1, 1, 1};
   glm::vec3 origin{0.f};
@@ -36,8 +37,15 @@ ChamferGrid chamfer_grid(glm::vec3 lo, glm::vec3 hi, int cells = 64);
 // The grid for `points` strand points over a fur of `area` (scene units squared) in the box: cells
 // holding about 100 points where the fur is (a query then walks one cell, or its 27 neighbours,
 // of short runs; measured fastest on lavapipe against 230 and 60), 16..256 along the longest side,
-// and as many rings as keep `reach` (clamped to 4..32 rings). With no area: 64 cells.
+// and as many rings as reach `reach` (4..kMaxChamferRings), fewer cells where the reach would
+// need more rings than that. With no area: 64 cells.
 ChamferGrid chamfer_grid_for(glm::vec3 lo, glm::vec3 hi, std::uint64_t points, double area, double reach);
+// A query's search visits up to (2 rings + 1)^3 cells in one invocation, and lavapipe ends an
+// invocation's loops past 65,535 iterations in all (docs/gpu-runtime.md): 12 rings are 15,625
+// cells, leaving room for the points in them; 20 rings of empty cells were already cut short.
+inline constexpr std::int32_t kMaxChamferRings = 12;
+// The adjoint sums all the queries that share a nearest point in one loop (see kMaxChamferRings).
+inline constexpr std::uint64_t kMaxChamferQueries = 60000;
 
 struct StrandChamferScratch {
   StrandChamferScratch(gpu::Context& context, std::uint64_t points, std::uint64_t queries, const ChamferGrid& grid);

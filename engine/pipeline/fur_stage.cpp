@@ -531,7 +531,7 @@ const SettingsSchema<FurSettings>& fur_settings() {
         .add("penetration_weight", [](F& f) -> auto& { return f.training.weights.penetration; }, 0, 1e9,
              "penetration into M_bald, in the unit-sphere normalisation (0: off)")
         .add("curvature_weight", [](F& f) -> auto& { return f.training.weights.curvature; }, 0, 1e9, "curvature consistency (0: off)")
-        .add("chamfer_queries", [](F& f) -> auto& { return f.training.chamfer_queries; }, 0, 1e7, "points of M_NeuS per step")
+        .add("chamfer_queries", [](F& f) -> auto& { return f.training.chamfer_queries; }, 0, 60000, "points of M_NeuS per step")
         .add("strand_width", [](F& f) -> auto& { return f.training.strand_width; }, 0, 1,
              "splat sigma across a strand in units of the scene radius (0: from the data, see coverage)")
         .add("coverage", [](F& f) -> auto& { return f.training.coverage; }, 1e-3, 1e3,

@@ -4,11 +4,12 @@
 // Chebyshev distance r = 0, 1, ..., max_rings around the query's cell, stopping once the best
 // distance is below r cells plus the query's distance to its own cell's nearest wall (every point
 // of a farther ring is at least that far), so a match is exact and a query whose nearest point
-// lies in its own cell, well inside it, visits that cell alone. A
-// query whose nearest point lies farther than max_rings cells is unmatched (nearest = ~0u, dist2 =
-// 0). The bound also keeps each invocation's loops short: lavapipe ends loops past 65,535
-// iterations without an error (docs/gpu-runtime.md); a query that had to search 20 rings of a 32^3
-// grid found nothing there, while 8 rings are exact in every test. Ties go to the lowest point
+// lies in its own cell, well inside it, visits that cell alone. A query whose nearest point lies
+// farther than max_rings cells is unmatched (nearest = ~0u, dist2 = 0). The bound also keeps the
+// invocation's work short: lavapipe's loop limiter counts the iterations of a loop and of every
+// loop nested in it together and ends them past 65,535 without an error (docs/gpu-runtime.md), so
+// the rings' cells (25^3 at the host's cap of 12 rings) and the points they hold must stay below
+// that; 20 rings of empty cells (39^3) already came back unmatched. Ties go to the lowest point
 // index, as in the reference. Host wrapper: engine/fur/strand_chamfer.cpp.
 
 layout(constant_id = 0) const uint WG = 64;
@@ -62,9 +63,13 @@ void main() {
   // How far the query lies inside its own cell: a point outside the cube of rings 0..r is at least
   // r cells plus this far away. Clamped to 0 on an axis where the query lies outside the grid, and
   // shortened by a little so that a point that floor() put in the next cell is still covered.
-  const vec3 lo = vec3(pc.ox, pc.oy, pc.oz) + vec3(c) * pc.cell;
+  // The margin covers floor()'s rounding of a point's cell: a small share of a cell, plus a few
+  // float steps of the coordinates' magnitude (a box far from the origin).
+  const vec3 origin = vec3(pc.ox, pc.oy, pc.oz), lo = origin + vec3(c) * pc.cell;
   const vec3 wall = max(min(x - lo, lo + pc.cell - x), vec3(0.0));
-  const float inner = max(min(min(wall.x, wall.y), wall.z) - 1e-4 * pc.cell, 0.0);
+  const vec3 magnitude = abs(x) + abs(origin);
+  const float margin = 1e-4 * pc.cell + 1e-6 * max(max(magnitude.x, magnitude.y), magnitude.z);
+  const float inner = min(min(wall.x, wall.y), wall.z) - margin;
   best = uintBitsToFloat(0x7f800000u);  // +inf
   best_id = 0xffffffffu;
   for (int r = 0; r <= rings; ++r) {
@@ -77,7 +82,7 @@ void main() {
           visit(c.x + r, c.y + dy, c.z + dz);
         }
       }
-    const float bound = float(r) * pc.cell + inner;
+    const float bound = max(float(r) * pc.cell + inner, 0.0);
     if (best_id != 0xffffffffu && best < bound * bound) break;
   }
   const float reach = float(pc.max_rings) * pc.cell;

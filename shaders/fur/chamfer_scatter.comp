@@ -21,28 +21,18 @@ layout(push_constant) uniform Push {
   float scale;  // 2 w / K
 } pc;
 
-const uint kChunk = 4096u;  // lavapipe ends loops past 65,535 iterations: a long run is walked in chunks
-
 void main() {
   const uint i = nf_linear_index();
   if (i >= pc.count) return;
   const uint j = nearest_sorted[i];
   if (j == 0xffffffffu || (i > 0u && nearest_sorted[i - 1u] == j)) return;  // unmatched, or not a run's head
+  // A run is at most the host's cap on queries (kMaxChamferQueries) long: lavapipe ends loops past
+  // 65,535 iterations.
   const vec3 p = vec3(points[3u * j], points[3u * j + 1u], points[3u * j + 2u]);
   vec3 g = vec3(0.0);
-  uint at = i;
-  bool more = true;
-  while (more) {
-    const uint stop = min(at + kChunk, pc.count);
-    for (; at < stop; ++at) {
-      if (nearest_sorted[at] != j) {
-        more = false;
-        break;
-      }
-      const uint k = sorted_queries[at];
-      g += p - vec3(queries[3u * k], queries[3u * k + 1u], queries[3u * k + 2u]);
-    }
-    more = more && at < pc.count;
+  for (uint at = i; at < pc.count && nearest_sorted[at] == j; ++at) {
+    const uint k = sorted_queries[at];
+    g += p - vec3(queries[3u * k], queries[3u * k + 1u], queries[3u * k + 2u]);
   }
   g *= pc.scale;
   grad_points[3u * j] = g.x + grad_points[3u * j];

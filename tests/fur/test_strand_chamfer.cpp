@@ -1,8 +1,8 @@
 // The one-way chamfer (engine/fur/strand_chamfer.*): the grid search finds exactly the brute-force
 // nearest points (ties to the lowest index) on coarse, fine and sparse grids and for points outside
 // the grid, and leaves unmatched exactly the queries beyond its reach; the fur stage's choice of
-// grid; a point nearest to thousands of queries; refusals. Its gradients are in the gradcheck
-// catalog.
+// grid and its loop budget; a point nearest to thousands of queries; the adjoint accumulating or
+// overwriting; refusals. Its gradients are in the gradcheck catalog.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -16,7 +16,7 @@ using namespace nf;
 using namespace nf::fur;
 
 TEST_CASE("strand chamfer: the grid search finds the brute-force nearest point, within its reach") {
-  const std::vector<float> queries = test::random_f32(3 * 300, 1, -1.f, 1.f);
+  const std::vector<float> queries = test::random_f32(3 * 300, 1, -1.2f, 1.2f);  // some outside the grid
   for (const int cells : {1, 4, 16, 64, 256}) {
     CAPTURE(cells);
     for (const std::size_t count : {std::size_t(5), std::size_t(3000)}) {
@@ -102,6 +102,47 @@ TEST_CASE("strand chamfer: a point nearest to thousands of queries gets their wh
   for (std::size_t i = 3; i < grad.size(); ++i) CHECK(grad[i] == 0.f);
 }
 
+TEST_CASE("strand chamfer: the fur stage's grid keeps its reach within lavapipe's loop budget") {
+  // Dense points on a small fur would ask for 256 cells; the reach (an eighth of the box) then needs
+  // 32 rings, past what one invocation may loop on lavapipe: the grid takes fewer cells instead.
+  const ChamferGrid grid = chamfer_grid_for(glm::vec3(-1.f), glm::vec3(1.f), 50000000, 0.01, 2.0 / 8);
+  CHECK(grid.max_rings == kMaxChamferRings);
+  CHECK(grid.dims[0] == 96);
+  CHECK(grid.reach() == doctest::Approx(2.0 / 8));
+  // A query just inside the reach walks all 12 rings of empty cells and finds the one point; one
+  // just outside is unmatched.
+  const std::vector<float> points{0.01f, 0.02f, 0.03f};
+  const float r = float(grid.reach());
+  const std::vector<float> queries{0.01f + 0.98f * r, 0.02f, 0.03f, 0.01f, 0.02f - 0.98f * r * 0.7071f, 0.03f + 0.98f * r * 0.7071f,
+                                   0.01f + 1.02f * r, 0.02f, 0.03f};
+  const std::vector<std::uint32_t> nn = strand_chamfer_nearest(test::context(), grid, queries, points);
+  CHECK(nn == std::vector<std::uint32_t>{0, 0, kUnmatched});
+  ChamferGrid deeper = grid;
+  deeper.max_rings = kMaxChamferRings + 1;
+  CHECK_THROWS_WITH_AS(strand_chamfer_nearest(test::context(), deeper, queries, points), doctest::Contains("rings"), InputError);
+}
+
+TEST_CASE("strand chamfer: the adjoint adds to a gradient when asked and overwrites it otherwise") {
+  const std::vector<float> points = test::random_f32(3 * 500, 6, -1.f, 1.f), queries = test::random_f32(3 * 200, 7, -1.f, 1.f);
+  const ChamferGrid grid = chamfer_grid(glm::vec3(-1.f), glm::vec3(1.f), 8);
+  const std::vector<double> ref = strand_chamfer_backward_ref(std::vector<double>(queries.begin(), queries.end()),
+                                                              std::vector<double>(points.begin(), points.end()), grid.reach(), 2.0);
+  gpu::Buffer<float> d_points(test::context(), points, "points"), d_queries(test::context(), queries, "queries");
+  StrandChamferScratch scratch(test::context(), 500, 200, grid);
+  for (const bool accumulate : {false, true}) {
+    CAPTURE(accumulate);
+    // One element past the points' gradient: the adjoint must not touch it.
+    gpu::Buffer<float> grad(test::context(), std::vector<float>(points.size() + 1, 0.5f), "gradient");
+    gpu::Stream stream(test::context());
+    strand_chamfer_forward(stream, grid, d_queries, d_points, scratch);
+    strand_chamfer_backward(stream, d_queries, d_points, scratch, 2.0, grad, accumulate);
+    stream.submit_and_wait();
+    const std::vector<float> g = grad.download();
+    for (std::size_t i = 0; i < points.size(); ++i) CHECK(g[i] == doctest::Approx(ref[i] + (accumulate ? 0.5 : 0.0)).epsilon(1e-5));
+    CHECK(g.back() == 0.5f);
+  }
+}
+
 TEST_CASE("strand chamfer refuses empty, non-finite and badly shaped input") {
   const ChamferGrid grid = chamfer_grid(glm::vec3(-1.f), glm::vec3(1.f), 8);
   CHECK_THROWS_AS(strand_chamfer(test::context(), grid, std::vector<float>(3), std::vector<float>()), InputError);
@@ -111,4 +152,6 @@ TEST_CASE("strand chamfer refuses empty, non-finite and badly shaped input") {
   CHECK_THROWS_WITH_AS(strand_chamfer(test::context(), grid, std::vector<float>(3), points), doctest::Contains("strand points"), InputError);
   CHECK_THROWS_AS(chamfer_grid(glm::vec3(0.f), glm::vec3(0.f), 8), InputError);
   CHECK_THROWS_AS(chamfer_grid(glm::vec3(0.f), glm::vec3(1.f), 0), InputError);
+  CHECK_THROWS_WITH_AS(StrandChamferScratch(test::context(), 10, kMaxChamferQueries + 1, grid), doctest::Contains("fur.chamfer_queries"), InputError);
 }
+
