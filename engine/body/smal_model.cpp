@@ -93,8 +93,9 @@ BodyModel load_smal_model(const std::filesystem::path& file) {
   m.parents.resize(J);
   for (std::size_t k = 0; k < J; ++k) {
     const double p = kt.values[k];
-    m.parents[k] = k == 0 ? -1 : int(p);
+    // Checked before the conversion: a parent past int's range is undefined behaviour to convert.
     if (k > 0 && !(p >= 0 && p < double(k))) in.fail("kintree_table", "names parent " + std::to_string(p) + " for joint " + std::to_string(k) + " (parents come first)");
+    m.parents[k] = k == 0 ? -1 : int(p);
   }
   // Joints and their shape directions through the regressor.
   std::vector<glm::dvec3> joints(J, glm::dvec3(0.0));
