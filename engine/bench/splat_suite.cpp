@@ -123,6 +123,7 @@ json run_splat_suite(gpu::Context& ctx, const Options& options) {
     for (const auto& [k, v] : both_passes) passes_b[k] = v;
     json metrics{{"gaussians", shape.segments()},
                  {"tile_entries", entries},
+                 {"walk_passes", double(raster.walk_passes())},
                  {"forward_s", fwd.median()},
                  {"forward_backward_s", both.median()},
                  {"gaussians_per_s_forward", double(shape.segments()) / fwd.median()},

@@ -61,6 +61,9 @@ struct DeviceTuning {
   bool mapped_device_buffers = false;  // device memory is host-visible: upload/download by memcpy
   bool use_push_descriptors = true;    // else descriptor sets from a per-stream pool
   std::uint32_t items_per_thread = 4;  // work per invocation for memory-bound primitives
+  // Iterations after which the driver ends a loop nest without an error (0: no such limit).
+  // Kernels whose loops run with the data size split their work so it stays below this.
+  std::uint32_t loop_iterations = 0;
 };
 
 json to_json(const DeviceInfo& info);

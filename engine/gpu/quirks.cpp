@@ -19,8 +19,13 @@ void cpu_device(DeviceTuning& t) {
   t.items_per_thread = 32;
 }
 
+// gallivm's loop limiter (LP_MAX_TGSI_LOOP_ITERATIONS) ends any loop, with the loops nested in it,
+// after 65,535 iterations (docs/gpu-runtime.md, "Long divergent loops on lavapipe").
+void loop_limiter(DeviceTuning& t) { t.loop_iterations = 65535; }
+
 const Quirk kQuirks[] = {
     {VK_DRIVER_ID_MESA_LLVMPIPE, "lavapipe: CPU device, mapped buffers, 32 items per invocation", cpu_device},
+    {VK_DRIVER_ID_MESA_LLVMPIPE, "lavapipe: loops end after 65,535 iterations", loop_limiter},
     {VK_DRIVER_ID_GOOGLE_SWIFTSHADER, "SwiftShader: CPU device, mapped buffers, 32 items per invocation", cpu_device},
 };
 

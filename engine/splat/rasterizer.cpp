@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 
 #include "engine/core/error.hpp"
 #include "engine/core/finite.hpp"
@@ -41,6 +42,12 @@ struct RangesPush {
 };
 struct CompositePush {
   std::uint32_t width, height, tiles_x, has_body;
+  std::uint32_t walk_begin, walk_end;
+  std::uint32_t long_count;
+  float depth_slack;
+};
+struct LongestPush {
+  std::uint32_t tiles, chunk;
 };
 struct GatherPush {
   std::uint32_t strands, points_per_strand, accumulate;
@@ -105,16 +112,39 @@ std::uint32_t pixels_per_invocation(bool gpu_layout) { return gpu_layout ? 1 : 4
 
 std::uint32_t composite_workgroup(bool gpu_layout) { return kTile * kTile / pixels_per_invocation(gpu_layout); }
 
-std::vector<gpu::SpecConstant> composite_spec(bool gpu_layout) {
-  return {{0, composite_workgroup(gpu_layout)}, {1, pixels_per_invocation(gpu_layout)}};
+// in_passes: the walk is split in passes (the resume code is compiled out of a single pass).
+std::vector<gpu::SpecConstant> composite_spec(bool gpu_layout, bool in_passes) {
+  return {{0, composite_workgroup(gpu_layout)}, {1, pixels_per_invocation(gpu_layout)}, {2, in_passes ? 1u : 0u}};
+}
+
+// Tile-list entries one compositing pass walks. A walk turns its loops about 1.25 times an entry
+// (batches of 8 lanes on lavapipe; 1.5 with 4), so half the device's loop limit keeps a pass
+// inside it; a device without a limit walks each list in one pass.
+std::uint32_t walk_chunk_for(const gpu::Context& ctx, const RasterParams& params) {
+  if (params.walk_chunk > 0) return params.walk_chunk;
+  const std::uint32_t limit = ctx.tuning().loop_iterations;
+  return limit > 0 ? std::max<std::uint32_t>(limit / 2, 1) : std::numeric_limits<std::uint32_t>::max();
+}
+
+// The push constants of compositing pass `pass` of `passes` (the last one walks to the list's end).
+CompositePush composite_push(const RasterCamera& camera, bool has_body, std::uint32_t chunk, std::uint32_t pass,
+                             std::uint32_t passes, std::uint32_t long_count) {
+  const std::uint32_t begin = pass * chunk;
+  const std::uint32_t end = pass + 1 == passes ? std::numeric_limits<std::uint32_t>::max() : begin + chunk;
+  // Depth keys truncate depth to depth_bits between near and far (rasterize_depth_keys): a
+  // Gaussian lies at most one step, plus float rounding, deeper than its key says.
+  const double step = (camera.far - camera.near) / double((1ull << depth_bits(camera)) - 1);
+  const float slack = float(2 * step + 1e-6 * camera.far);
+  return {camera.width, camera.height, tiles_x(camera), has_body ? 1u : 0u, begin, end, long_count, slack};
 }
 
 }  // namespace
 
 struct StrandRasterizer::Impl {
   gpu::Context& context;
-  std::unique_ptr<gpu::Buffer<float>> proj, grad_proj, grad_segment, final_t, no_body;
+  std::unique_ptr<gpu::Buffer<float>> proj, grad_proj, grad_segment, final_t, no_body, walk_carry;
   std::unique_ptr<gpu::Buffer<std::uint32_t>> touched, offsets, total, rects, keys, values, ranges, last;
+  std::unique_ptr<gpu::Buffer<std::uint32_t>> walk_stats, long_tiles;  // longest list, tiles longer than a pass
   std::unique_ptr<gpu::Buffer<std::uint32_t>> depth_keys, order, sorted_touched, rank;  // depth order of the Gaussians
   // State of the last forward, for the backward.
   StrandShape shape;
@@ -122,6 +152,7 @@ struct StrandRasterizer::Impl {
   RasterParams params;
   gpu::BufferRange points, body;
   std::uint64_t entries = 0;
+  std::uint32_t walk_chunk = 0, walk_passes = 1, long_count = 0;  // how compositing walks the tile lists
   bool has_body = false;
   const bool gpu_layout;  // chosen once, so that forward and backward agree
   explicit Impl(gpu::Context& c) : context(c), gpu_layout(choose_gpu_layout(c)) {}
@@ -131,6 +162,7 @@ StrandRasterizer::StrandRasterizer(gpu::Context& context) : impl_(std::make_uniq
 StrandRasterizer::~StrandRasterizer() = default;
 
 std::uint64_t StrandRasterizer::tile_entries() const { return impl_->entries; }
+std::uint32_t StrandRasterizer::walk_passes() const { return impl_->walk_passes; }
 
 void StrandRasterizer::forward(const StrandShape& shape, gpu::BufferRange points, gpu::BufferRange confidence,
                                const RasterCamera& camera, const RasterParams& params, gpu::BufferRange body_depth,
@@ -227,14 +259,35 @@ void StrandRasterizer::forward(const StrandShape& shape, gpu::BufferRange points
   } else {
     ensure(ctx, m.values, 1, "raster values");
   }
+  // A list longer than one pass's walk needs several: the longest list says how many, and the
+  // passes after the first visit only the tiles whose list is that long.
+  m.walk_chunk = walk_chunk_for(ctx, params);
+  m.walk_passes = 1, m.long_count = 0;
+  ensure(ctx, m.walk_stats, 2, "raster walk stats");
+  ensure(ctx, m.long_tiles, 1, "raster long tiles");
+  if (m.entries > m.walk_chunk) {
+    ensure(ctx, m.long_tiles, tiles, "raster long tiles");
+    {
+      gpu::ScopedPass pass(stream, "splat/rasterize_longest");
+      stream.fill(m.walk_stats->range(0, 2), 0);
+      stream.dispatch(ctx.kernel("splat/rasterize_longest", {{0, 128}}),
+                      {m.ranges->range(0, std::uint64_t(tiles) * 2), m.walk_stats->range(0, 2), m.long_tiles->range(0, tiles)},
+                      LongestPush{tiles, m.walk_chunk}, gpu::Elements(tiles));
+    }
+    stream.submit_and_wait();
+    const std::vector<std::uint32_t> stats = m.walk_stats->download(0, 2);
+    m.walk_passes = std::max<std::uint32_t>(1, std::uint32_t((std::uint64_t(stats[0]) + m.walk_chunk - 1) / m.walk_chunk));
+    m.long_count = stats[1];
+  }
   {
     gpu::ScopedPass pass(stream, "splat/rasterize_fwd");
-    const CompositePush cp{camera.width, camera.height, ntx, m.has_body ? 1u : 0u};
-    stream.dispatch(ctx.kernel("splat/rasterize_fwd", composite_spec(m.gpu_layout)),
-                    {m.proj->range(0, segments * kProjected), m.values->range(0, std::max<std::uint64_t>(m.entries, 1)),
-                     m.ranges->range(0, std::uint64_t(tiles) * 2), m.body, image, m.final_t->range(0, pixels),
-                     m.last->range(0, pixels)},
-                    cp, gpu::Elements(std::uint64_t(tiles) * composite_workgroup(m.gpu_layout)));
+    for (std::uint32_t p = 0; p < m.walk_passes; ++p)
+      stream.dispatch(ctx.kernel("splat/rasterize_fwd", composite_spec(m.gpu_layout, m.walk_passes > 1)),
+                      {m.proj->range(0, segments * kProjected), m.values->range(0, std::max<std::uint64_t>(m.entries, 1)),
+                       m.ranges->range(0, std::uint64_t(tiles) * 2), m.body, image, m.final_t->range(0, pixels),
+                       m.last->range(0, pixels), m.long_tiles->range(0, std::max<std::uint32_t>(m.long_count, 1))},
+                      composite_push(camera, m.has_body, m.walk_chunk, p, m.walk_passes, m.long_count),
+                      gpu::Elements(std::uint64_t(p == 0 ? tiles : m.long_count) * composite_workgroup(m.gpu_layout)));
   }
   stream.submit_and_wait();
 }
@@ -254,18 +307,23 @@ void StrandRasterizer::backward(gpu::Stream& stream, gpu::BufferRange grad_image
   ensure(ctx, m.grad_segment, segments * 6, "raster segment gradients");
   const std::uint32_t ntx = tiles_x(camera), tiles = ntx * tiles_y(camera);
   stream.fill(m.grad_proj->range(0, segments * kProjected), 0);
+  // The adjoint state handed from pass to pass when the forward walked the lists in several.
+  ensure(ctx, m.walk_carry, m.walk_passes > 1 ? pixels * 6 : 1, "raster walk carry");
   {
     gpu::ScopedPass pass(stream, "splat/rasterize_bwd");
-    const CompositePush cp{camera.width, camera.height, ntx, m.has_body ? 1u : 0u};
     // Shared-memory sums in the GPU layout where the device has shared float atomics (gpu_layout;
     // NF_NO_SHARED_FLOAT_ATOMICS=1 takes them away).
     const bool shared_sums = m.gpu_layout && ctx.info().features.float32_atomic_add_shared;
     const char* variant = shared_sums ? "splat/rasterize_bwd:shared" : "splat/rasterize_bwd:subgroup";
-    stream.dispatch(ctx.kernel(variant, composite_spec(m.gpu_layout)),
-                    {m.proj->range(0, segments * kProjected), m.values->range(0, std::max<std::uint64_t>(m.entries, 1)),
-                     m.ranges->range(0, std::uint64_t(tiles) * 2), m.body, m.final_t->range(0, pixels),
-                     m.last->range(0, pixels), grad_image, m.grad_proj->range(0, segments * kProjected)},
-                    cp, gpu::Elements(std::uint64_t(tiles) * composite_workgroup(m.gpu_layout)));
+    for (std::uint32_t p = m.walk_passes; p-- > 0;)
+      stream.dispatch(ctx.kernel(variant, composite_spec(m.gpu_layout, m.walk_passes > 1)),
+                      {m.proj->range(0, segments * kProjected), m.values->range(0, std::max<std::uint64_t>(m.entries, 1)),
+                       m.ranges->range(0, std::uint64_t(tiles) * 2), m.body, m.final_t->range(0, pixels),
+                       m.last->range(0, pixels), grad_image, m.grad_proj->range(0, segments * kProjected),
+                       m.walk_carry->range(0, m.walk_passes > 1 ? pixels * 6 : 1),
+                       m.long_tiles->range(0, std::max<std::uint32_t>(m.long_count, 1))},
+                      composite_push(camera, m.has_body, m.walk_chunk, p, m.walk_passes, m.long_count),
+                      gpu::Elements(std::uint64_t(p == 0 ? tiles : m.long_count) * composite_workgroup(m.gpu_layout)));
   }
   {
     gpu::ScopedPass pass(stream, "splat/rasterize_project_bwd");

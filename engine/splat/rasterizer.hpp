@@ -43,6 +43,9 @@ class StrandRasterizer {
 
   // Tile entries (Gaussian x tile pairs) of the last forward.
   std::uint64_t tile_entries() const;
+  // Compositing passes of the last forward (more than one where a tile's list is longer than a
+  // pass may walk on this device: RasterParams::walk_chunk).
+  std::uint32_t walk_passes() const;
 
  private:
   struct Impl;

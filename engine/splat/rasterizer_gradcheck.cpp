@@ -27,6 +27,7 @@ RasterCamera camera_of(const Params& p) {
 RasterParams params_of(const Params& p) {
   RasterParams r;
   r.gaussian = {0.5, p.at("strand_width")};
+  r.walk_chunk = std::uint32_t(p.at("walk_chunk"));
   return r;
 }
 
@@ -58,7 +59,8 @@ Case make_case(std::string name, std::uint32_t strands, std::uint32_t L, double 
   Case c;
   c.name = std::move(name);
   c.params = {{"strands", strands}, {"points_per_strand", L}, {"width_px", 24}, {"height_px", 20}, {"focal", 30},
-              {"distance", 2}, {"strand_width", 0.05}, {"occluder_depth", 0}, {"occluder_x", 0}};
+              {"distance", 2}, {"strand_width", 0.05}, {"occluder_depth", 0}, {"occluder_x", 0},
+              {"walk_chunk", 0}};
   for (const auto& [k, v] : extra) c.params[k] = v;
   c.inputs = {pts, conf};
   c.step_double = {1e-7, 1e-7};
@@ -77,7 +79,11 @@ class RasterizerCheck : public gradcheck::WithReference<RasterizerCheck> {
   std::vector<Case> cases() const override {
     return {make_case("two_strands", 2, 5, 0.3, 3, {}),
             make_case("tiles_and_overlap", 4, 6, 0.6, 5, {{"width_px", 40}, {"height_px", 36}}),
-            make_case("occluded_left", 3, 5, 0.4, 7, {{"occluder_depth", 1.0}, {"occluder_x", 10}})};
+            make_case("occluded_left", 3, 5, 0.4, 7, {{"occluder_depth", 1.0}, {"occluder_x", 10}}),
+            // Tile lists walked 3 entries a pass (devices with a loop limit walk long lists in
+            // passes): partial batches, and each subgroup's walk ending in a different pass.
+            make_case("walked_in_passes", 8, 6, 0.3, 11, {{"width_px", 24}, {"height_px", 20}, {"walk_chunk", 3},
+                                                         {"occluder_depth", 1.95}, {"occluder_x", 9}})};
   }
 
   template <class T>

@@ -55,6 +55,9 @@ struct RasterParams {
   SegmentGaussianParams gaussian;
   double low_pass = 0.3;            // px^2 added to the 2D covariance
   double orientation_guard = 1e-4;  // gamma, px^2
+  // Tile-list entries one compositing pass walks (0: the device's choice, the whole list where
+  // loops have no iteration limit). Execution only: the image and gradients do not depend on it.
+  std::uint32_t walk_chunk = 0;
 };
 
 inline std::uint32_t tiles_x(const RasterCamera& c) { return (c.width + kTile - 1) / kTile; }

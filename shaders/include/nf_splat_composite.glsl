@@ -23,6 +23,7 @@
 
 const float ALPHA_MIN = 1.0 / 255.0, ALPHA_MAX = 0.99, T_MIN = 5e-5;  // see rasterizer_ref.hpp
 const float POWER_MIN = -5.5413;  // ln(1/255): below it alpha < 1/255 whatever the opacity (<= 1)
+const uint NF_WALK_DONE = 0x80000000u;  // in `last`: the pixel's walk has ended (it saturated)
 
 // One projected Gaussian in registers.
 struct NfGaussian {

@@ -11,12 +11,15 @@
 //             subgroup starts at its own pixels' last contributor. On CPU devices (lavapipe) this
 //             is 1.5x faster: their shared atomics are per-lane loops and barriers switch
 //             coroutines, while a tile there has only two subgroups.
+// Like the forward, a pass undoes list positions [walk_begin, walk_end); passes run from the last
+// to the first, handing each pixel's adjoint state (T_after, behind) on through `carry`.
 //! variant shared -DNF_SHARED_SUMS
 //! variant subgroup -DNF_SUBGROUP_SUMS
 #extension GL_EXT_shader_atomic_float : require
 
 layout(constant_id = 0) const uint WG = 64;  // NF_TILE^2 / PPI
 layout(constant_id = 1) const uint PPI = 1;  // pixels per invocation: a column of PPI rows
+layout(constant_id = 2) const bool IN_PASSES = false;  // lists walked in several passes (compiled out if not)
 layout(local_size_x_id = 0) in;
 #extension GL_EXT_control_flow_attributes : require
 #include "nf_index.glsl"
@@ -26,12 +29,17 @@ layout(std430, binding = 1) readonly buffer Values { uint values[]; };
 layout(std430, binding = 2) readonly buffer Ranges { uint ranges[]; };
 layout(std430, binding = 3) readonly buffer Body { float body_depth[]; };
 layout(std430, binding = 4) readonly buffer FinalT { float final_t[]; };
-layout(std430, binding = 5) readonly buffer Last { uint last[]; };
+layout(std430, binding = 5) readonly buffer Last { uint last[]; };  // list positions used | NF_WALK_DONE
 layout(std430, binding = 6) readonly buffer GradImage { float grad_image[]; };  // 5 planes
 layout(std430, binding = 7) buffer GradProj { float grad_proj[]; };             // per Gaussian * 12, accumulated
+layout(std430, binding = 8) buffer Carry { float carry[]; };  // 6 planes of H * W: T_after, behind (walks of several passes)
+layout(std430, binding = 9) readonly buffer LongTiles { uint long_tiles[]; };  // tiles the passes after the first visit
 
 layout(push_constant) uniform Push {
   uint width, height, tiles_x, has_body;
+  uint walk_begin, walk_end;  // list positions (from the tile's start) this pass undoes
+  uint long_count;            // passes after the first: one workgroup per tile of long_tiles
+  float depth_slack;          // (the forward's)
 } pc;
 
 #include "nf_splat_composite.glsl"
@@ -92,7 +100,11 @@ void undo(uint r, const NfGaussian gs, uint position, inout float grad[FIELDS], 
 }
 
 void main() {
-  const uint tile = nf_linear_group();
+  uint tile = nf_linear_group();
+  if (IN_PASSES && pc.walk_begin > 0u) {
+    if (tile >= pc.long_count) return;
+    tile = long_tiles[tile];
+  }
   if (tile >= pc.tiles_x * ((pc.height + NF_TILE - 1u) / NF_TILE)) return;  // folded dispatches may overshoot
   const uint ty = tile / pc.tiles_x, tx = tile - ty * pc.tiles_x;
   const uint lx = gl_LocalInvocationID.x % NF_TILE, ly0 = (gl_LocalInvocationID.x / NF_TILE) * PPI;
@@ -106,7 +118,7 @@ void main() {
     const uint pix = inside[r] ? py * pc.width + px : 0u;
     occluder[r] = (inside[r] && pc.has_body != 0u) ? body_depth[pix] : 3.0e38;
     q[r] = vec2(px, py) + 0.5;
-    my_last[r] = inside[r] ? start + last[pix] : start;
+    my_last[r] = inside[r] ? start + (last[pix] & ~NF_WALK_DONE) : start;
     lane_last = max(lane_last, my_last[r]);
     [[unroll]] for (uint c = 0u; c < 5u; ++c) {
       g[r][c] = inside[r] ? grad_image[c * plane + pix] : 0.0;
@@ -133,12 +145,26 @@ void main() {
 #else
   const uint count = subgroup_last - start;
 #endif
-  const uint end_used = start + count;
+  // This pass's share of the walk; nothing when the walk ends below it (the count is uniform over
+  // the workgroup where barriers follow).
+  if (count <= pc.walk_begin) return;
+  const uint span = min(count, pc.walk_end) - pc.walk_begin;
+  const uint end_used = start + pc.walk_begin + span;
+  if (IN_PASSES) {
+    // A pixel whose walk goes on past this pass had its positions behind undone by a later pass:
+    // take up its state (decided per pixel, so that no two dispatches need the same subgroups).
+    [[unroll]] for (uint r = 0u; r < PPI; ++r) {
+      if (!inside[r] || my_last[r] - start <= pc.walk_end) continue;
+      const uint pix = (ty * NF_TILE + ly0 + r) * pc.width + px;
+      T_after[r] = carry[pix];
+      [[unroll]] for (uint c = 0u; c < 5u; ++c) behind[r][c] = carry[(c + 1u) * plane + pix];
+    }
+  }
   // Loops are do-while on purpose: on lavapipe a while or for loop runs its body once more, masked,
   // before it leaves (its exit test sits at the top); a do-while tests at the bottom.
   uint done_count = 0u;
-  if (count > 0u) do {
-    const uint n = min(lanes, count - done_count);
+  do {
+    const uint n = min(lanes, span - done_count);
     const uint first = end_used - done_count - n;  // this batch covers [first, first + n)
     const uint my_id = values[first + min(lane, n - 1u)];
     const NfGaussianLanes mine = nf_load_gaussian(my_id);
@@ -186,5 +212,13 @@ void main() {
         if (sums[f] != 0.0) atomicAdd(grad_proj[my_id * 12u + f], sums[f]);
 #endif
     done_count += lanes;
-  } while (done_count < count);
+  } while (done_count < span);
+  if (IN_PASSES && pc.walk_begin > 0u) {  // an earlier pass goes on from here
+    [[unroll]] for (uint r = 0u; r < PPI; ++r) {
+      if (!inside[r]) continue;
+      const uint pix = (ty * NF_TILE + ly0 + r) * pc.width + px;
+      carry[pix] = T_after[r];
+      [[unroll]] for (uint c = 0u; c < 5u; ++c) carry[(c + 1u) * plane + pix] = behind[r][c];
+    }
+  }
 }
