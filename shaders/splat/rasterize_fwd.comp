@@ -97,11 +97,14 @@ void main() {
   vec2 lo, hi;
   nf_subgroup_rect(q[0], q[PPI - 1u], lo, hi);
   // The deepest body behind a pixel still compositing (+inf where no body is seen; a NaN depth
-  // hides nothing in composite, so it counts as none here too).
+  // hides nothing in composite, so it counts as none here too). Without a body nothing stops early.
+  const bool body_stops = pc.has_body != 0u;
   float deepest = -3.0e38;
-  [[unroll]] for (uint r = 0u; r < PPI; ++r)
-    if (!done[r]) deepest = max(deepest, isnan(occluder[r]) ? 3.0e38 : occluder[r]);
-  deepest = subgroupMax(deepest) + pc.depth_slack;
+  if (body_stops) {
+    [[unroll]] for (uint r = 0u; r < PPI; ++r)
+      if (!done[r]) deepest = max(deepest, isnan(occluder[r]) ? 3.0e38 : occluder[r]);
+    deepest = subgroupMax(deepest) + pc.depth_slack;
+  }
   const uint stop = start + min(end - start, pc.walk_end);
   const uint lane = gl_SubgroupInvocationID, lanes = nf_active_lanes();
   // Loops are do-while on purpose: on lavapipe a while or for loop runs its body once more, masked,
@@ -113,7 +116,7 @@ void main() {
     const NfGaussianLanes mine = nf_load_gaussian(values[first + min(lane, n - 1u)]);
     // The list runs front to back: once a whole batch lies behind every pixel's body, so does the
     // rest of it, and nothing there would be composited.
-    if (subgroupMin(mine.b.z) > deepest) break;
+    if (body_stops && subgroupMin(mine.b.z) > deepest) break;
     const uvec4 reach = subgroupBallot(lane < n && nf_reaches(nf_unpack(mine), lo, hi));
     uint word = 0u;
     do {
