@@ -27,16 +27,21 @@ std::vector<std::string> env_list(const char* name, std::vector<std::string> fal
   return out;
 }
 
-// The fur stage's settings for a variant of the run ("" : none).
-std::vector<std::string> variant_settings(const std::string& variant) {
+// The settings of a variant of the run ("" : none) after the knowledge preset's. Every variant but
+// `truth_knowledge_file` changes the fur stage only; that one replaces the knowledge preset with the
+// scene's gt/knowledge.json from the knowledge stage on, so the defur stage removes the fur's true
+// thickness (the fur stage's `truth=knowledge` comes after defur and keeps the preset's).
+std::vector<std::string> variant_settings(const std::string& variant, const fs::path& scene) {
   if (variant.empty()) return {};
   if (variant == "warm_off") return {"fur.warm_start=0", "fur.warm_steps=0"};
   if (variant == "truth_knowledge") return {"fur.truth=knowledge"};
+  if (variant == "truth_knowledge_file") return {"knowledge.file=" + (scene / "gt" / "knowledge.json").string()};
   if (variant == "truth_all") return {"fur.truth=all"};
   for (const char* loss : {"silhouette", "orientation", "direction", "chamfer", "penetration", "curvature"})
     if (variant == std::string("no_") + loss) return {std::string("fur.") + loss + "_weight=0"};
   throw UsageError("NF_BENCH_FUR_VARIANTS: unknown variant '" + variant +
-                   "' (warm_off, truth_knowledge, truth_all, no_silhouette, no_orientation, no_direction, no_chamfer, no_penetration, no_curvature)");
+                   "' (warm_off, truth_knowledge, truth_knowledge_file, truth_all, no_silhouette, no_orientation, no_direction, "
+                   "no_chamfer, no_penetration, no_curvature)");
 }
 
 json read_json(const fs::path& file) {
@@ -64,8 +69,9 @@ json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
   const std::vector<std::string> variants =
       env_list("NF_BENCH_FUR_VARIANTS", options.quick ? std::vector<std::string>{"truth_all"}
                                                       : std::vector<std::string>{"truth_all", "truth_knowledge", "warm_off", "no_silhouette", "no_orientation",
-                                                                                 "no_direction", "no_chamfer", "no_penetration", "no_curvature"});
-  for (const std::string& v : variants) variant_settings(v);  // unknown names fail before any work
+                                                                                 "no_direction", "no_chamfer", "no_penetration", "no_curvature",
+                                                                                 "truth_knowledge_file"});
+  for (const std::string& v : variants) variant_settings(v, root);  // unknown names fail before any work
   for (const std::string& p : presets)
     if (p != "draft" && p != "default" && p != "paper") throw UsageError("NF_BENCH_FUR_PRESETS: unknown preset '" + p + "' (draft, default, paper)");
   const double curve_seconds = options.quick ? 10 : 60;
@@ -94,7 +100,10 @@ json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
         pipeline::ReconstructOptions ro;
         ro.scene = scene, ro.work = work, ro.quality = "draft";
         ro.run.to = "fur";
-        ro.settings = {"knowledge.preset=" + animal};
+        // `truth_knowledge_file` (last in the default list) names its own knowledge, so the stages
+        // from knowledge on rerun for it; the other variants share the preset's.
+        ro.settings.clear();
+        if (variant != "truth_knowledge_file") ro.settings.push_back("knowledge.preset=" + animal);
         if (options.quick) ro.settings.push_back("neus.steps=150");
         ro.settings.insert(ro.settings.end(), fur_preset.begin(), fur_preset.end());
         // The groom's inference is not what is measured: the metrics' strands suffice.
@@ -102,7 +111,7 @@ json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
         ro.settings.push_back("fur.curve_seconds=" + json(curve_seconds).dump());
         ro.settings.push_back("fur.preview_views=0");
         if (options.quick) ro.settings.insert(ro.settings.end(), {"fur.steps=60", "fur.warm_steps=10", "fur.batch=1500", "fur.resolution=128"});
-        for (const std::string& v : variant_settings(variant)) ro.settings.push_back(v);
+        for (const std::string& v : variant_settings(variant, scene)) ro.settings.push_back(v);
         log::info("bench fur: ", animal, ", preset ", presets[p], variant.empty() ? "" : ", variant " + variant);
         const std::vector<pipeline::StageOutcome> outcomes = pipeline::reconstruct(ctx, ro);
         const json m = read_json(pipeline::fur_outputs(work).metrics());

@@ -1,8 +1,10 @@
 #include "engine/synth/synth_scene.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <random>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -19,6 +21,7 @@
 #include "engine/io/strand_files.hpp"
 #include "engine/knowledge/knowledge.hpp"
 #include "engine/synth/camera_rig.hpp"
+#include "engine/synth/effective_thickness.hpp"
 #include "engine/synth/fur_envelope.hpp"
 #include "engine/synth/fur_growth.hpp"
 #include "engine/synth/strand_renderer.hpp"
@@ -99,6 +102,13 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
 
   const Envelope envelope = fur_envelope(bald, fur.strands);
   timings["envelope_s"] = clock.lap();
+  // The ground-truth knowledge states the thickness the grown fur has, not the preset's guess.
+  const std::array<float, body::kRegionCount> thickness = effective_thickness(bald, envelope.mesh);
+  for (std::size_t r = 0; r < thickness.size(); ++r) {
+    std::optional<knowledge::RegionKnowledge>& k = know.regions[r];
+    if (k && k->length_cm > 0 && thickness[r] >= 0) k->thickness_cm = std::min(k->length_cm, float(thickness[r] * kCmPerUnit));
+  }
+  timings["thickness_s"] = clock.lap();
 
   // Cameras on two rings around the envelope's bounding sphere.
   glm::vec3 lo(1e30f), hi(-1e30f);

@@ -3,7 +3,8 @@
 // Writes, into a new folder (atomically: a temp folder renamed at the end):
 //   transforms.json, images/NNN.png, masks/NNN.png (body + fur coverage >= 1/2),
 //   gt/strands.hair (scene units = metres), gt/bald.ply (region per vertex), gt/outer.ply (the fur
-//   envelope, see fur_envelope.hpp), gt/knowledge.json, gt/scene.json (cm per unit, eye centres,
+//   envelope, see fur_envelope.hpp), gt/knowledge.json (the preset it grew from, with the true eye
+//   distance and each region's effective thickness, see effective_thickness.hpp), gt/scene.json (cm per unit, eye centres,
 //   body parameters, how outer.ply was made, timings), gt/body.glb (the bald body, for viewing).
 #include <cstdint>
 #include <filesystem>
