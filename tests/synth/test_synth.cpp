@@ -14,6 +14,7 @@
 
 #include "engine/body/quadruped.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/stats.hpp"
 #include "engine/geometry/marching_cubes.hpp"
 #include "engine/geometry/mesh_tools.hpp"
 #include "engine/geometry/point_index.hpp"
@@ -206,17 +207,16 @@ TEST_CASE("a written synthetic scene: files, ground truth, and roots inside the 
       for (int r = 0; r < body::kRegionCount; ++r) {
         const auto region = static_cast<body::Region>(r);
         if (!k.grows_fur(region)) continue;
-        std::vector<float> gap;
+        std::vector<double> gap;
         for (std::size_t v = 0; v < bald.vertex_count(); ++v)
           if (bald.regions[v] == r) gap.push_back(std::sqrt(outer_vertices.nearest(&bald.positions[3 * v]).second));
         if (gap.size() < 50) continue;
-        std::nth_element(gap.begin(), gap.begin() + std::ptrdiff_t(gap.size() / 2), gap.end());
         const float thickness = k.at(region).thickness_cm / 100.0f;
         CAPTURE(body::kRegionNames[std::size_t(r)]);
         CHECK(thickness > 0);
         CHECK(thickness <= k.at(region).length_cm / 100.0f);
         // (capped at the length: a paw pad's 1 mm fur sits in an envelope closed over the toes)
-        const float expected = std::min(gap[gap.size() / 2], k.at(region).length_cm / 100.0f);
+        const float expected = std::min(float(median(std::move(gap))), k.at(region).length_cm / 100.0f);
         CHECK(thickness <= expected + 1e-5f);
         CHECK(thickness >= expected - voxel);
         ++checked;
