@@ -66,6 +66,7 @@ json to_json(const FurTrainingOptions& o) {
           {"lr", o.lr},
           {"lr_floor", o.lr_floor},
           {"weight_decay", o.weight_decay},
+          {"image_ramp_steps", o.image_ramp_steps},
           {"weights", to_json(o.weights)},
           {"chamfer_queries", o.chamfer_queries},
           {"strand_width", o.strand_width},
@@ -290,6 +291,8 @@ FurStepReport FurTrainer::train_step() {
   field_->backward(stream, m.batch);
   nn::LearningRateSchedule schedule{options_.lr, 0, options_.steps, options_.lr_floor};
   r.lr = schedule.at(step_);
+  if (!r.warm && options_.image_ramp_steps > 0 && step_ >= options_.warm_steps)
+    r.lr *= std::min(1.f, float(step_ - options_.warm_steps + 1) / float(options_.image_ramp_steps));
   m.adam->step(stream, field_->mlp().parameters(), field_->mlp().gradients(), r.lr);
   if (m.adam_decoder) m.adam_decoder->step(stream, field_->prior().decoder().parameters(), field_->prior().decoder().gradients(), r.lr);
   stream.submit_and_wait();
@@ -350,13 +353,35 @@ std::vector<float> FurTrainer::render(const FurView& view, std::uint32_t strands
   stream.submit_and_wait();
   float longest = 0;
   for (std::uint32_t id : ids) longest = std::max(longest, data_.roots.length[id]);
-  const auto [near, far] = depth_range(view, longest);
+  return rasterize(view, batch.points, batch.confidence, std::uint32_t(ids.size()), longest);
+}
+
+std::vector<float> FurTrainer::render_strands(const FurView& view, const std::vector<float>& points) {
+  const std::size_t per_strand = std::size_t(kStrandPoints) * 3;
+  if (points.empty() || points.size() % per_strand) throw InputError("fur: strands to render need " + std::to_string(kStrandPoints) + " points each");
+  const std::uint32_t n = std::uint32_t(points.size() / per_strand);
+  double reach = 0;  // how far a strand reaches from its root, for the depth range
+  for (std::size_t i = 0; i < n; ++i) {
+    const float* root = &points[i * per_strand];
+    for (std::size_t k = 1; k < kStrandPoints; ++k) {
+      const float* q = root + 3 * k;
+      reach = std::max(reach, std::hypot(double(q[0] - root[0]), double(q[1] - root[1]), double(q[2] - root[2])));
+    }
+  }
+  gpu::Buffer<float> d_points(context_, points, "fur rendered strands");
+  // Fully confident segments: what the warm start renders and what a given groom means.
+  gpu::Buffer<float> d_confidence(context_, std::vector<float>(std::size_t(n) * kStrandSegments, 1.f), "fur rendered confidence");
+  return rasterize(view, d_points, d_confidence, n, reach);
+}
+
+std::vector<float> FurTrainer::rasterize(const FurView& view, gpu::BufferRange points, gpu::BufferRange confidence, std::uint32_t strands,
+                                         double reach) {
+  const auto [near, far] = depth_range(view, reach);
   splat::RasterParams params;
-  params.gaussian.width = strand_width(std::uint32_t(ids.size()));
+  params.gaussian.width = strand_width(strands);
   const std::uint64_t px = view.pixels();
   gpu::Buffer<float> depth(context_, view.body_depth, "fur score depth"), image(context_, 5 * px, "fur score image");
-  impl_->rasterizer.forward({batch.strands, kStrandPoints}, batch.points, batch.confidence, splat::raster_camera(view.crop, near, far), params,
-                            depth, image);
+  impl_->rasterizer.forward({strands, kStrandPoints}, points, confidence, splat::raster_camera(view.crop, near, far), params, depth, image);
   return image.download();
 }
 

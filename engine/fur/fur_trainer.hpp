@@ -54,6 +54,12 @@ struct FurTrainingOptions {
   bool warm_start = true;                 // start the field at the lifted straight strand (else: random)
   double lying_angle_deg = 25;            // the warm start's angle between strand and skin
   float lr = 1e-3f, lr_floor = 0.1f, weight_decay = 0.01f;
+  // The image losses' first steps may ramp the learning rate up linearly over this many steps (0:
+  // none): Adam's second moments still hold the warm-up's small gradients, so the first image steps
+  // move the field several times the learning rate. On the bench cat at `default` a 25-step ramp
+  // removed the dip at step 60-70 (F(2 mm, 20°) 38.9 against 25.2) and reached 40 a minute sooner,
+  // but ended 1.9 points lower (40.2 against 42.1; docs/fur-stage.md), so it is off by default.
+  std::uint32_t image_ramp_steps = 0;
   FurLossWeights weights;
   std::uint32_t chamfer_queries = 10000;  // points of M_NeuS per step
   // The splats' sigma across a strand. 0 (default): from the data, so that the step's strands cover
@@ -135,6 +141,9 @@ class FurTrainer {
   // The field's strands at `strands` roots (a seeded subset) rendered into `view`: the rasteriser's
   // 5 planes (alpha, orientation x, y, confidence, depth).
   std::vector<float> render(const FurView& view, std::uint32_t strands, unsigned seed);
+  // Given strands (strands x 100 x 3, world), fully confident, rendered into `view` like the field's
+  // at the same count: what a baseline or the true groom scores on the held-out views.
+  std::vector<float> render_strands(const FurView& view, const std::vector<float>& points);
 
   void save_checkpoint(const std::filesystem::path& path) const;
   // false (nothing changed) when written for other settings; InputError for a broken file.
@@ -143,6 +152,10 @@ class FurTrainer {
  private:
   struct Impl;
   FurStepReport train_step();
+  // The rasteriser's 5 planes of `strands` strands in `view`; `reach`: how far a strand reaches
+  // from its root (the depth range's margin).
+  std::vector<float> rasterize(const FurView& view, gpu::BufferRange points, gpu::BufferRange confidence, std::uint32_t strands,
+                               double reach);
   gpu::Context& context_;
   const FurTrainingData& data_;
   double mean_root_length_ = 1;  // of data_.roots (the splat width's denominator), computed once

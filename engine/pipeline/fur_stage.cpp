@@ -119,14 +119,15 @@ struct HeldOutScores {
   double silhouette_iou = 0, orientation_error_deg = 0;  // means over the views
 };
 
-// The field's strands rendered into each held-out view and scored against its targets; `images`
+// A groom's strands rendered into each held-out view and scored against its targets; `images`
 // (when given) keeps the renderings for the previews; `before_each` may stop the work.
-HeldOutScores score_held_out(fur::FurTrainer& trainer, const std::vector<fur::FurView>& views, const io::Scene& scene, std::uint32_t strands,
-                             unsigned seed, std::vector<std::vector<float>>* images, const std::function<void()>& before_each = {}) {
+HeldOutScores score_held_out(const std::vector<fur::FurView>& views, const io::Scene& scene,
+                             const std::function<std::vector<float>(const fur::FurView&)>& render, std::vector<std::vector<float>>* images,
+                             const std::function<void()>& before_each = {}) {
   HeldOutScores h;
   for (const fur::FurView& v : views) {
     if (before_each) before_each();
-    std::vector<float> image = trainer.render(v, strands, seed);
+    std::vector<float> image = render(v);
     const fur::ViewScore score = fur::score_view(v, image);
     h.views.push_back({{"camera", scene.cameras[v.camera].name}, {"silhouette_iou", score.silhouette_iou},
                        {"orientation_error_deg", score.orientation_error_deg}, {"pixels", score.pixels}});
@@ -137,16 +138,30 @@ HeldOutScores score_held_out(fur::FurTrainer& trainer, const std::vector<fur::Fu
   return h;
 }
 
+// The field's strands at `strands` seeded roots.
+HeldOutScores score_field_held_out(fur::FurTrainer& trainer, const std::vector<fur::FurView>& views, const io::Scene& scene,
+                                   std::uint32_t strands, unsigned seed, std::vector<std::vector<float>>* images,
+                                   const std::function<void()>& before_each = {}) {
+  return score_held_out(views, scene, [&](const fur::FurView& v) { return trainer.render(v, strands, seed); }, images, before_each);
+}
+
+// Given strands (strands x 100 x 3) rendered like the field's: the baseline groom, and on synth
+// scenes the true groom, whose score is the floor the photos' Gabor maps allow.
+HeldOutScores score_strands_held_out(fur::FurTrainer& trainer, const std::vector<fur::FurView>& views, const io::Scene& scene,
+                                     const std::vector<float>& points, const std::function<void()>& before_each) {
+  return score_held_out(views, scene, [&](const fur::FurView& v) { return trainer.render_strands(v, points); }, nullptr, before_each);
+}
+
+json held_out_json(const HeldOutScores& h) { return {{"silhouette_iou", h.silhouette_iou}, {"orientation_error_deg", h.orientation_error_deg}}; }
+
 // One point of curve.jsonl: training time, the held-out views' scores and, with a ground truth,
 // the groom's F-scores and tips against the truth (metric_strands strands of the field, inferred
 // at a fixed subset of the roots so that the points differ only by the training).
 json curve_point(fur::FurTrainer& trainer, const fur::FurTrainingData& data, const FurSettings& s, const io::Scene& scene,
                  const metrics::GroomTruth& truth, double cm, std::uint32_t score_strands) {
   const Stopwatch t;
-  const HeldOutScores held = score_held_out(trainer, data.held_out, scene, score_strands, s.training.seed + 7, nullptr);
-  json p{{"step", trainer.step()},
-         {"seconds", trainer.step() ? trainer.last_report().seconds : 0.0},
-         {"held_out", {{"silhouette_iou", held.silhouette_iou}, {"orientation_error_deg", held.orientation_error_deg}}}};
+  const HeldOutScores held = score_field_held_out(trainer, data.held_out, scene, score_strands, s.training.seed + 7, nullptr);
+  json p{{"step", trainer.step()}, {"seconds", trainer.step() ? trainer.last_report().seconds : 0.0}, {"held_out", held_out_json(held)}};
   if (trainer.step()) p["loss"] = trainer.last_report().loss;
   if (truth.strands || truth.outer) {
     std::vector<std::uint32_t> ids = fur::sample_indices(data.roots.size(), s.metric_strands, s.training.seed + 13);
@@ -297,11 +312,16 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
 
   // The ground truth (synth scenes) for the scores and the curve.
   metrics::GroomTruth truth;
-  std::optional<metrics::StrandSample> gt_sample;
+  std::optional<metrics::StrandSample> gt_sample, gt_rendered;  // for the metrics; for the held-out views
   std::optional<geometry::Mesh> gt_outer;
   json gt_info;
+  const std::uint32_t score_strands = s.score_strands ? s.score_strands : s.training.strands;
   if (const auto gt = io::find_ground_truth(c.scene_dir)) {
-    if (fs::exists(gt->strands())) gt_sample = metrics::sample_strands(io::read_hair(gt->strands()), s.metric_strands, s.metric_points, 2);
+    if (fs::exists(gt->strands())) {
+      const io::StrandSet gt_hair = io::read_hair(gt->strands());
+      gt_sample = metrics::sample_strands(gt_hair, s.metric_strands, s.metric_points, 2);
+      gt_rendered = metrics::sample_strands(gt_hair, score_strands, fur::kStrandPoints, 3);
+    }
     if (fs::exists(gt->outer())) gt_outer = io::read_mesh(gt->outer());
     truth.strands = gt_sample ? &*gt_sample : nullptr;
     truth.outer = gt_outer ? &*gt_outer : nullptr;
@@ -309,7 +329,6 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
     if (std::abs(gt->cm_per_unit - cm) > 1e-3 * gt->cm_per_unit)
       log::warn("fur: the knowledge's scale (", cm, " cm per unit) differs from the ground truth's (", gt->cm_per_unit, "); metrics use the knowledge's");
   }
-  const std::uint32_t score_strands = s.score_strands ? s.score_strands : s.training.strands;
 
   // Training, resumable.
   t.restart();
@@ -400,8 +419,21 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
   // Held-out views.
   t.restart();
   std::vector<std::vector<float>> held_images;
-  const HeldOutScores held = score_held_out(*trainer, data.held_out, c.scene, score_strands, s.training.seed + 7, &held_images,
-                                            [&] { stop_if_interrupted("scoring"); });
+  const auto stop_if_scoring_interrupted = [&] { stop_if_interrupted("scoring"); };
+  const HeldOutScores held = score_field_held_out(*trainer, data.held_out, c.scene, score_strands, s.training.seed + 7, &held_images,
+                                                  stop_if_scoring_interrupted);
+  // The baseline groom on the roots the field was just scored at, and the true groom (synth).
+  json held_json = held_out_json(held);
+  held_json["views"] = held.views;
+  if (!data.held_out.empty()) {
+    const std::vector<std::uint32_t> scored_ids = fur::sample_indices(data.roots.size(), score_strands, s.training.seed + 7);
+    const io::StrandSet held_baseline = fur::baseline_groom(data.roots, scored_ids, s.training.lying_angle_deg, fur::kStrandPoints);
+    held_json["baseline"] = held_out_json(score_strands_held_out(*trainer, data.held_out, c.scene, held_baseline.points, stop_if_scoring_interrupted));
+    if (gt_rendered && gt_rendered->strands > 0)
+      held_json["truth"] = held_out_json(score_strands_held_out(*trainer, data.held_out, c.scene, gt_rendered->xyz, stop_if_scoring_interrupted));
+    log::info("fur: held-out orientation error ", held.orientation_error_deg, " deg (baseline ", held_json["baseline"]["orientation_error_deg"].get<double>(),
+              held_json.contains("truth") ? ", true groom " + std::to_string(held_json["truth"]["orientation_error_deg"].get<double>()) : std::string(), ")");
+  }
   seconds["held_out"] = t.seconds();
 
   // Inference: the roots file when the count matches, else as many roots drawn anew.
@@ -486,7 +518,7 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
                {"views", {{"train", data.train.size()}, {"held_out", data.held_out.size()}, {"orientation_reliability", reliability},
                           {"rendered_pixels_per_view", rendered / std::max<std::size_t>(1, data.train.size())},
                           {"rendered_fraction_of_photo", full ? double(rendered) / double(full) : 0.0}}},
-               {"held_out", {{"views", held.views}, {"silhouette_iou", held.silhouette_iou}, {"orientation_error_deg", held.orientation_error_deg}}},
+               {"held_out", held_json},
                {"groom", groom_scores},
                {"baseline", baseline_scores},
                {"previews", previews},
@@ -521,6 +553,8 @@ const SettingsSchema<FurSettings>& fur_settings() {
         .add("lr", [](F& f) -> auto& { return f.training.lr; }, 1e-7, 1, "AdamW learning rate, cosine decay to lr_floor x lr")
         .add("lr_floor", [](F& f) -> auto& { return f.training.lr_floor; }, 0, 1, "the last step's share of lr")
         .add("weight_decay", [](F& f) -> auto& { return f.training.weight_decay; }, 0, 1, "AdamW weight decay")
+        .add("image_ramp_steps", [](F& f) -> auto& { return f.training.image_ramp_steps; }, 0, 1e8,
+             "steps over which the learning rate ramps up when the image losses start (0: none)")
         .add("silhouette_weight", [](F& f) -> auto& { return f.training.weights.silhouette; }, 0, 1e9, "silhouette L1 (0: off)")
         .add("orientation_weight", [](F& f) -> auto& { return f.training.weights.orientation; }, 0, 1e9,
              "orientation against the Gabor maps with rendered confidence (0: off)")

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "engine/core/error.hpp"
 #include "engine/fur/baseline_groom.hpp"
 #include "engine/fur/ground_truth_inputs.hpp"
 #include "engine/io/ground_truth.hpp"
@@ -60,6 +61,30 @@ TEST_CASE("fur learning: a few hundred steps bring strands lifted too far back o
   FurTrainer trainer(ctx, in.data, *prior, {}, o);
   trainer.train(o.warm_steps);
   const double iou_before = held_out_iou(trainer, in.data);
+  {
+    // Given strands render like the field's: its own strands at the same roots score the same
+    // (the warm start's segments are fully confident), and the true groom covers the masks as well
+    // as the field's strands at the same count (a wrong frame or scale would leave them empty).
+    const std::vector<std::uint32_t> ids = sample_indices(in.data.roots.size(), trainer.batch(), 5);
+    std::vector<float> own;
+    trainer.field().infer(in.data.roots, ids, 1024, [&](std::size_t, std::uint32_t, const std::vector<float>& p, const std::vector<float>&) {
+      own.insert(own.end(), p.begin(), p.end());
+    });
+    const metrics::StrandSample truth =
+        metrics::sample_strands(io::read_hair(io::find_ground_truth(dir / "scene")->strands()), trainer.batch(), kStrandPoints, 3);
+    for (const FurView& v : in.data.held_out) {
+      const ViewScore field = score_view(v, trainer.render(v, trainer.batch(), 5));
+      const ViewScore given = score_view(v, trainer.render_strands(v, own));
+      const ViewScore true_groom = score_view(v, trainer.render_strands(v, truth.xyz));
+      MESSAGE("held-out view ", v.camera, ": field IoU ", field.silhouette_iou, " orientation ", field.orientation_error_deg,
+              " deg; as given strands ", given.silhouette_iou, " / ", given.orientation_error_deg, "; true groom ",
+              true_groom.silhouette_iou, " / ", true_groom.orientation_error_deg);
+      CHECK(given.silhouette_iou == doctest::Approx(field.silhouette_iou).epsilon(0.01));
+      CHECK(given.orientation_error_deg == doctest::Approx(field.orientation_error_deg).epsilon(0.01));
+      CHECK(true_groom.silhouette_iou > 0.8 * field.silhouette_iou);
+    }
+    CHECK_THROWS_AS(trainer.render_strands(in.data.held_out[0], std::vector<float>(7)), InputError);
+  }
   // Exact resume: a trainer loaded from a checkpoint takes the same next step (same roots, view,
   // chamfer points and parameters: the same loss).
   trainer.save_checkpoint(dir / "checkpoint.nfwt");
@@ -102,5 +127,18 @@ TEST_CASE("fur learning: a few hundred steps bring strands lifted too far back o
   CHECK(f_groom >= f_base + 15.0);
   CHECK(f_groom_mm >= f_base_mm + 5.0);
   CHECK(iou_after >= iou_before - 0.02);
+
+  // The image losses' learning-rate ramp: the warm steps and the steps after the ramp follow the
+  // cosine schedule, the ramp's steps a linear share of it.
+  FurTrainingOptions ramped = o;
+  ramped.steps = 8, ramped.strands = 300, ramped.warm_steps = 2, ramped.image_ramp_steps = 4, ramped.chamfer_queries = 300;
+  FurTrainer ramp_trainer(ctx, in.data, *prior, {}, ramped);
+  const nn::LearningRateSchedule cosine{ramped.lr, 0, ramped.steps, ramped.lr_floor};
+  for (std::uint32_t step = 0; step < ramped.steps; ++step) {
+    const FurStepReport r = ramp_trainer.train(step + 1);
+    const float share = step < ramped.warm_steps ? 1.f : std::min(1.f, float(step - ramped.warm_steps + 1) / float(ramped.image_ramp_steps));
+    CHECK(r.warm == (step < ramped.warm_steps));
+    CHECK(r.lr == doctest::Approx(cosine.at(step) * share).epsilon(1e-6));
+  }
   fs::remove_all(dir);
 }
