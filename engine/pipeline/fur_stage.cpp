@@ -320,7 +320,8 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
     if (fs::exists(gt->strands())) {
       const io::StrandSet gt_hair = io::read_hair(gt->strands());
       gt_sample = metrics::sample_strands(gt_hair, s.metric_strands, s.metric_points, 2);
-      gt_rendered = metrics::sample_strands(gt_hair, score_strands, fur::kStrandPoints, 3);
+      // As many as the field's scored strands, so that both render at the same width.
+      gt_rendered = metrics::sample_strands(gt_hair, std::min<std::uint32_t>(score_strands, std::uint32_t(data.roots.size())), fur::kStrandPoints, 3);
     }
     if (fs::exists(gt->outer())) gt_outer = io::read_mesh(gt->outer());
     truth.strands = gt_sample ? &*gt_sample : nullptr;

@@ -369,6 +369,8 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   CHECK(fur_summary["baseline"]["fscore"].contains("2mm_20deg"));
   CHECK(fur_summary["held_out"]["silhouette_iou"].get<double>() > 0.0);
   // The held-out views also score the baseline groom and, on a synth scene, the true groom.
+  REQUIRE(fur_summary["held_out"].contains("baseline"));
+  REQUIRE(fur_summary["held_out"].contains("truth"));
   CHECK(fur_summary["held_out"]["baseline"]["silhouette_iou"].get<double>() > 0.0);
   CHECK(fur_summary["held_out"]["truth"]["silhouette_iou"].get<double>() > 0.0);
   const Result metrics_cmd = run("metrics --pred " + (work / "fur" / "strands.hair").string() + " --strands 200 --json");
