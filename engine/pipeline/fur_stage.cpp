@@ -146,7 +146,8 @@ HeldOutScores score_field_held_out(fur::FurTrainer& trainer, const std::vector<f
 }
 
 // Given strands (strands x 100 x 3) rendered like the field's: the baseline groom, and on synth
-// scenes the true groom, whose score is the floor the photos' Gabor maps allow.
+// scenes the true groom: what the truth itself scores against the photos' Gabor maps, the scale
+// on which the groom's held-out orientation error can be read.
 HeldOutScores score_strands_held_out(fur::FurTrainer& trainer, const std::vector<fur::FurView>& views, const io::Scene& scene,
                                      const std::vector<float>& points, const std::function<void()>& before_each) {
   return score_held_out(views, scene, [&](const fur::FurView& v) { return trainer.render_strands(v, points); }, nullptr, before_each);
