@@ -60,11 +60,9 @@ json groom_summary(const json& scores) {
 
 // The held-out views' scores of the groom, with the baseline groom's and the true groom's (the
 // truth's own score against the photos' Gabor maps) where the stage rendered them.
-json held_out_summary(const json& held) {
-  json s{{"silhouette_iou", held.at("silhouette_iou")}, {"orientation_error_deg", held.at("orientation_error_deg")}};
-  for (const char* key : {"baseline", "truth"})
-    if (held.contains(key)) s[key] = held[key];
-  return s;
+json held_out_summary(json held) {
+  held.erase("views");  // per view: metrics.json keeps them
+  return held;
 }
 
 }  // namespace

@@ -291,7 +291,7 @@ FurStepReport FurTrainer::train_step() {
   field_->backward(stream, m.batch);
   nn::LearningRateSchedule schedule{options_.lr, 0, options_.steps, options_.lr_floor};
   r.lr = schedule.at(step_);
-  if (!r.warm && options_.image_ramp_steps > 0 && step_ >= options_.warm_steps)
+  if (!r.warm && options_.image_ramp_steps > 0)  // !warm: step_ >= warm_steps
     r.lr *= std::min(1.f, float(step_ - options_.warm_steps + 1) / float(options_.image_ramp_steps));
   m.adam->step(stream, field_->mlp().parameters(), field_->mlp().gradients(), r.lr);
   if (m.adam_decoder) m.adam_decoder->step(stream, field_->prior().decoder().parameters(), field_->prior().decoder().gradients(), r.lr);
