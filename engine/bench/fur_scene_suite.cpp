@@ -27,21 +27,35 @@ std::vector<std::string> env_list(const char* name, std::vector<std::string> fal
   return out;
 }
 
-// The settings of a variant of the run ("" : none) after the knowledge preset's. Every variant but
-// `truth_knowledge_file` changes the fur stage only; that one replaces the knowledge preset with the
-// scene's gt/knowledge.json from the knowledge stage on, so the defur stage removes the fur's true
-// thickness (the fur stage's `truth=knowledge` comes after defur and keeps the preset's).
+// The settings of a variant of the run ("" : none) after the knowledge preset's. Variants join
+// with '+' (`truth_envelope+truth_knowledge_file`: both swaps). Most change the fur stage only;
+// `truth_knowledge_file` replaces the knowledge preset with the scene's gt/knowledge.json from the
+// knowledge stage on, so the defur stage removes the fur's true thickness (the fur stage's
+// `truth=knowledge` comes after defur and keeps the preset's), and `truth_envelope` replaces the
+// draft NeuS with gt/outer.ply (neus.mesh), so every stage after it reruns on the true envelope.
 std::vector<std::string> variant_settings(const std::string& variant, const fs::path& scene) {
   if (variant.empty()) return {};
+  if (const std::size_t plus = variant.find('+'); plus != std::string::npos) {
+    std::vector<std::string> both = variant_settings(variant.substr(0, plus), scene);
+    for (std::string& s : variant_settings(variant.substr(plus + 1), scene)) both.push_back(std::move(s));
+    return both;
+  }
   if (variant == "warm_off") return {"fur.warm_start=0", "fur.warm_steps=0"};
   if (variant == "truth_knowledge") return {"fur.truth=knowledge"};
   if (variant == "truth_knowledge_file") return {"knowledge.file=" + (scene / "gt" / "knowledge.json").string()};
+  if (variant == "truth_envelope") return {"neus.mesh=" + (scene / "gt" / "outer.ply").string()};
   if (variant == "truth_all") return {"fur.truth=all"};
   for (const char* loss : {"silhouette", "orientation", "direction", "chamfer", "penetration", "curvature"})
     if (variant == std::string("no_") + loss) return {std::string("fur.") + loss + "_weight=0"};
   throw UsageError("NF_BENCH_FUR_VARIANTS: unknown variant '" + variant +
-                   "' (warm_off, truth_knowledge, truth_knowledge_file, truth_all, no_silhouette, no_orientation, no_direction, "
-                   "no_chamfer, no_penetration, no_curvature)");
+                   "' (warm_off, truth_knowledge, truth_knowledge_file, truth_envelope, truth_all, no_silhouette, no_orientation, "
+                   "no_direction, no_chamfer, no_penetration, no_curvature; join with '+')");
+}
+
+bool sets_stage(const std::vector<std::string>& settings, const std::string& stage) {
+  for (const std::string& s : settings)
+    if (s.rfind(stage + ".", 0) == 0) return true;
+  return false;
 }
 
 json read_json(const fs::path& file) {
@@ -77,7 +91,8 @@ json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
       env_list("NF_BENCH_FUR_VARIANTS", options.quick ? std::vector<std::string>{"truth_all"}
                                                       : std::vector<std::string>{"truth_all", "truth_knowledge", "warm_off", "no_silhouette", "no_orientation",
                                                                                  "no_direction", "no_chamfer", "no_penetration", "no_curvature",
-                                                                                 "truth_knowledge_file"});
+                                                                                 "truth_knowledge_file", "truth_envelope",
+                                                                                 "truth_envelope+truth_knowledge_file"});
   for (const std::string& v : variants) variant_settings(v, root);  // unknown names fail before any work
   for (const std::string& p : presets)
     if (p != "draft" && p != "default" && p != "paper") throw UsageError("NF_BENCH_FUR_PRESETS: unknown preset '" + p + "' (draft, default, paper)");
@@ -104,13 +119,17 @@ json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
       std::vector<std::string> runs{""};
       if (p == 0) runs.insert(runs.end(), variants.begin(), variants.end());
       for (const std::string& variant : runs) {
+        const std::vector<std::string> swaps = variant_settings(variant, scene);
+        // A variant that changes a stage before fur works in its own copy of the preset run's WORK,
+        // so the shared earlier stages stay as they are for the other runs.
+        const bool own_work = sets_stage(swaps, "neus") || sets_stage(swaps, "knowledge");
+        const fs::path run_work = own_work ? root / (animal + "-work-" + variant) : work;
+        if (own_work && !fs::exists(run_work)) fs::copy(work, run_work, fs::copy_options::recursive);
         pipeline::ReconstructOptions ro;
-        ro.scene = scene, ro.work = work, ro.quality = "draft";
+        ro.scene = scene, ro.work = run_work, ro.quality = "draft";
         ro.run.to = "fur";
-        // `truth_knowledge_file` (last in the default list) names its own knowledge, so the stages
-        // from knowledge on rerun for it; the other variants share the preset's.
         ro.settings.clear();
-        if (variant != "truth_knowledge_file") ro.settings.push_back("knowledge.preset=" + animal);
+        if (!sets_stage(swaps, "knowledge")) ro.settings.push_back("knowledge.preset=" + animal);
         if (options.quick) ro.settings.push_back("neus.steps=150");
         ro.settings.insert(ro.settings.end(), fur_preset.begin(), fur_preset.end());
         // The groom's inference is not what is measured: the metrics' strands suffice.
@@ -118,10 +137,10 @@ json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
         ro.settings.push_back("fur.curve_seconds=" + json(curve_seconds).dump());
         ro.settings.push_back("fur.preview_views=0");
         if (options.quick) ro.settings.insert(ro.settings.end(), {"fur.steps=60", "fur.warm_steps=10", "fur.batch=1500", "fur.resolution=128"});
-        for (const std::string& v : variant_settings(variant, scene)) ro.settings.push_back(v);
+        ro.settings.insert(ro.settings.end(), swaps.begin(), swaps.end());
         log::info("bench fur: ", animal, ", preset ", presets[p], variant.empty() ? "" : ", variant " + variant);
         const std::vector<pipeline::StageOutcome> outcomes = pipeline::reconstruct(ctx, ro);
-        const json m = read_json(pipeline::fur_outputs(work).metrics());
+        const json m = read_json(pipeline::fur_outputs(run_work).metrics());
 
         json stage_seconds = json::object();
         for (const pipeline::StageOutcome& o : outcomes) stage_seconds[o.name] = {{"seconds", o.seconds}, {"ran", o.ran}};

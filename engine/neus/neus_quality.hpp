@@ -17,6 +17,7 @@ struct NeusQuality {
   VisualHullOptions hull;
   int hold_out_every = 8;       // every 8th view is held out for PSNR
   int mesh_resolution = 256;    // marching-cubes cells along the box's longest axis
+  std::string mesh;             // an envelope of the user's own used instead of training (empty: train)
 };
 
 // InputError naming the preset when it is unknown.

@@ -13,6 +13,7 @@
 #include "engine/io/ground_truth.hpp"
 #include "engine/io/mesh.hpp"
 #include "engine/metrics/surface_metrics.hpp"
+#include "engine/neus/envelope_input.hpp"
 #include "engine/neus/neus_previews.hpp"
 #include "engine/neus/surface_extraction.hpp"
 #include "engine/nn/weights_io.hpp"
@@ -46,12 +47,12 @@ json cameras_json(const io::Scene& scene) {
 }
 
 // Ground truth when the scene is an `nf_gpu synth` scene: chamfer against its fur envelope.
-json ground_truth_metrics(const StageContext& c, const geometry::Mesh& mesh, const neus::NeusTrainingData& data) {
+json ground_truth_metrics(const StageContext& c, const geometry::Mesh& mesh, const neus::OccupancyGrid& hull) {
   const std::optional<io::GroundTruth> gt = io::find_ground_truth(c.scene_dir);
   if (!gt || !fs::exists(gt->outer()) || mesh.triangle_count() == 0) return json();
   const metrics::SurfaceMetrics m = metrics::surface_metrics(mesh, io::read_mesh(gt->outer()), gt->cm_per_unit);
   glm::dvec3 lo, hi;
-  data.hull.occupied_bounds(lo, hi);
+  hull.occupied_bounds(lo, hi);
   const double diagonal_mm = glm::length(hi - lo) * gt->cm_per_unit * 10.0, pct = 100.0 * m.chamfer_mean_mm / diagonal_mm;
   log::info("neus: chamfer against gt/outer.ply ", m.chamfer_mean_mm, " mm (", pct, " % of the box diagonal)");
   json j = metrics::to_json(m);
@@ -59,6 +60,26 @@ json ground_truth_metrics(const StageContext& c, const geometry::Mesh& mesh, con
   j["chamfer_mean_pct_diagonal"] = pct;
   j["reference"] = "gt/outer.ply";
   return j;
+}
+
+// `neus.mesh`: the user's envelope, checked against the masks' visual hull, becomes M_NeuS as it is
+// (no field, no renders: later stages read outer.ply only).
+json use_envelope_file(const StageContext& c, const neus::NeusQuality& q, const NeusOutputs& out) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const neus::OccupancyGrid hull = neus::carve_visual_hull(c.scene, q.hull);
+  neus::EnvelopeInputReport report;
+  const geometry::Mesh mesh = neus::read_envelope_input(q.mesh, hull, &report);
+  io::write_mesh_ply(out.outer(), mesh);
+  log::info("neus: M_NeuS from ", q.mesh, " (", report.triangles, " triangles, ", 100.0 * report.inside_hull,
+            " % of the vertices inside the masks' visual hull); no training");
+  json summary{{"source", "file"},
+               {"file", fs::absolute(q.mesh).string()},
+               {"envelope", neus::to_json(report)},
+               {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()}};
+  const json gt = ground_truth_metrics(c, mesh, hull);
+  if (!gt.is_null()) summary["ground_truth"] = gt;
+  write_file_atomic(out.metrics(), summary.dump(2) + "\n");
+  return summary;
 }
 
 }  // namespace
@@ -69,6 +90,8 @@ std::vector<fs::path> NeusStage::inputs(const StageContext& c) const {
     if (!cam.image.empty()) files.push_back(cam.image);
     if (!cam.mask.empty()) files.push_back(cam.mask);
   }
+  const neus::NeusQuality q = settings_of(c);
+  if (!q.mesh.empty()) files.push_back(q.mesh);
   if (const auto gt = io::find_ground_truth(c.scene_dir))  // synth scenes: metrics.json compares with them
     for (const fs::path& f : {gt->outer(), gt->scene_json()})
       if (fs::exists(f)) files.push_back(f);
@@ -78,6 +101,11 @@ std::vector<fs::path> NeusStage::inputs(const StageContext& c) const {
 json NeusStage::parameters(const StageContext& c) const {
   const neus::NeusQuality q = settings_of(c);
   const neus::VisualHullOptions& h = q.hull;
+  if (!q.mesh.empty())  // the file's content is an input; training settings do not matter
+    return {{"stage_version", kStageVersion},
+            {"envelope", "neus.mesh"},
+            {"hull", {h.resolution, h.coarse_resolution, h.dilate_px, h.min_views, h.margin_cells}},
+            {"cameras", cameras_json(c.scene)}};
   return {{"stage_version", kStageVersion},
           {"quality", c.quality},
           {"field", neus::to_json(q.field)},
@@ -91,6 +119,7 @@ json NeusStage::parameters(const StageContext& c) const {
 json NeusStage::run(StageContext& c, const fs::path& out_dir, const fs::path& resume) {
   const neus::NeusQuality q = settings_of(c);
   const NeusOutputs out{out_dir};
+  if (!q.mesh.empty()) return use_envelope_file(c, q, out);
   const auto t0 = std::chrono::steady_clock::now();
   const neus::NeusTrainingData data = neus::load_neus_training_data(c.scene, q.hull, q.hold_out_every);
   if (interrupted()) throw Interrupted("neus: stopped before the first training step; nothing to save");
@@ -159,7 +188,7 @@ json NeusStage::run(StageContext& c, const fs::path& out_dir, const fs::path& re
                          {"components", grid.components}}},
                {"held_out", previews},
                {"peak_device_bytes", c.gpu.peak_allocated_bytes()}};
-  const json gt = ground_truth_metrics(c, mesh, data);
+  const json gt = ground_truth_metrics(c, mesh, data.hull);
   if (!gt.is_null()) summary["ground_truth"] = gt;
   write_file_atomic(out.metrics(), summary.dump(2) + "\n");
   return summary;
@@ -193,6 +222,8 @@ const SettingsSchema<neus::NeusQuality>& neus_settings() {
              "marching-cubes cells along the longest axis of the hull's box")
         .add("hull_resolution", [](Q& q) -> auto& { return q.hull.resolution; }, 8, 2048,
              "visual-hull cells along the longest axis of its box")
+        .text("mesh", [](Q& q) -> auto& { return q.mesh; }, {},
+              "an envelope of your own (PLY, OBJ or glTF in the scene's frame and units, e.g. a scan) used as M_NeuS instead of training")
         .check([](const Q& q) { q.training.validate(); });
     return s;
   }();

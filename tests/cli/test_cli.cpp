@@ -598,6 +598,80 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   fs::remove_all(root);
 }
 
+TEST_CASE("reconstruct: neus.mesh takes an envelope of the user's own, checked against the masks") {
+  namespace fs = std::filesystem;
+  const fs::path root = fs::temp_directory_path() / "nf_cli_envelope";
+  fs::remove_all(root);
+  const fs::path scene = root / "scene", work = root / "work";
+  REQUIRE(run("synth --animal cat --views 8 --res 64 --strands 4000 --spp-axis 1 --out " + scene.string()).code == 0);
+  const nf::geometry::Mesh truth = nf::io::read_mesh(scene / "gt" / "outer.ply");
+  // The user's files: the true envelope, the same with its faces turned inwards, in centimetres
+  // instead of the scene's metres, and shrunk to a fifth about its first vertex.
+  const fs::path mine = root / "mine.ply", inverted = root / "inverted.ply", in_cm = root / "in_cm.ply", small = root / "small.ply";
+  nf::io::write_mesh_ply(mine, truth);
+  nf::geometry::Mesh m = truth;
+  for (std::size_t t = 0; t < m.triangles.size(); t += 3) std::swap(m.triangles[t + 1], m.triangles[t + 2]);
+  m.normals.clear();
+  nf::io::write_mesh_ply(inverted, m);
+  m = truth;
+  for (float& x : m.positions) x *= 100.f;
+  nf::io::write_mesh_ply(in_cm, m);
+  m = truth;
+  for (std::size_t i = 0; i < m.positions.size(); ++i) m.positions[i] = truth.positions[i % 3] + 0.2f * (m.positions[i] - truth.positions[i % 3]);
+  nf::io::write_mesh_ply(small, m);
+  const std::string mine_bytes = slurp(mine);
+
+  const std::string body = " --quality draft --set body.samples=2000 --set body.hypothesis_steps=8 --set body.global_steps=10"
+                           " --set body.pose_steps=20 --set body.offset_steps=10 --set body.preview_views=0";
+  const auto reconstruct = [&](const fs::path& mesh, const std::string& to) {
+    return run("reconstruct --scene " + scene.string() + " --out " + work.string() + body + " --set neus.mesh=" + mesh.string() +
+               " --to " + to + " --json");
+  };
+  const Result first = reconstruct(mine, "body");
+  INFO(first.output);
+  REQUIRE(first.code == 0);
+  const nf::json stages = nf::json::parse(first.output.substr(first.output.find('[')));
+  REQUIRE(stages.size() == 2);
+  const nf::json& ns = stages[0]["summary"];
+  CHECK(ns["source"] == "file");
+  CHECK(ns["envelope"]["inside_hull"].get<double>() == doctest::Approx(1.0));
+  CHECK_FALSE(ns["envelope"]["flipped"].get<bool>());
+  CHECK(ns["ground_truth"]["chamfer_mm"]["mean"].get<double>() < 1e-3);  // M_NeuS is the file, unchanged
+  CHECK(nf::io::read_mesh(work / "neus" / "outer.ply").positions == truth.positions);
+  CHECK_FALSE(fs::exists(work / "neus" / "model.nfwt"));  // nothing trained
+  // The body stage fits the given envelope like a trained one.
+  CHECK(stages[1]["ran"] == true);
+  CHECK(stages[1]["summary"]["ground_truth"]["accuracy"].get<double>() > 0.5);
+
+  const Result same = reconstruct(mine, "neus");
+  REQUIRE(same.code == 0);
+  CHECK(nf::json::parse(same.output.substr(same.output.find('[')))[0]["ran"] == false);  // the same file: skipped
+
+  // Faces turned inwards are turned back (a warning), and the new file reruns the stage.
+  const Result turned = reconstruct(inverted, "neus");
+  REQUIRE(turned.code == 0);
+  const nf::json t = nf::json::parse(turned.output.substr(turned.output.find('[')));
+  CHECK(t[0]["ran"] == true);
+  CHECK(t[0]["summary"]["envelope"]["flipped"].get<bool>());
+  CHECK(nf::io::read_mesh(work / "neus" / "outer.ply").triangles == truth.triangles);
+
+  // Another unit, or part of the animal: refused (exit 1, bad input), naming the file and the measured share; the
+  // previous M_NeuS stays.
+  const Result cm = reconstruct(in_cm, "neus");
+  CHECK(cm.code == 1);
+  CHECK(cm.output.find(in_cm.string()) != std::string::npos);
+  CHECK(cm.output.find("inside the visual hull of the masks") != std::string::npos);
+  const Result part = reconstruct(small, "neus");
+  CHECK(part.code == 1);
+  CHECK(part.output.find("of the masks' visual hull (at least 50.0 %") != std::string::npos);
+  const Result missing = reconstruct(root / "no_such.ply", "neus");
+  CHECK(missing.code == 1);
+  CHECK(missing.output.find("no_such.ply") != std::string::npos);
+  CHECK(nf::io::read_mesh(work / "neus" / "outer.ply").triangles == truth.triangles);
+  CHECK(slurp(mine) == mine_bytes);  // the user's file is never written
+  fs::remove_all(root);
+}
+
 TEST_CASE("Ctrl-C during training saves a checkpoint, says how to resume and exits with 130") {
   namespace fs = std::filesystem;
   const fs::path root = fs::temp_directory_path() / "nf_cli_sigint";
