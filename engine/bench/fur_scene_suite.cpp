@@ -1,5 +1,6 @@
 #include "engine/bench/fur_scene_suite.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -36,6 +37,8 @@ std::vector<std::string> env_list(const char* name, std::vector<std::string> fal
 std::vector<std::string> variant_settings(const std::string& variant, const fs::path& scene) {
   if (variant.empty()) return {};
   if (const std::size_t plus = variant.find('+'); plus != std::string::npos) {
+    if (plus == 0 || plus + 1 == variant.size())
+      throw UsageError("NF_BENCH_FUR_VARIANTS: '" + variant + "' joins an empty variant (write a+b)");
     std::vector<std::string> both = variant_settings(variant.substr(0, plus), scene);
     for (std::string& s : variant_settings(variant.substr(plus + 1), scene)) both.push_back(std::move(s));
     return both;
@@ -124,7 +127,13 @@ json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
         // so the shared earlier stages stay as they are for the other runs.
         const bool own_work = sets_stage(swaps, "neus") || sets_stage(swaps, "knowledge");
         const fs::path run_work = own_work ? root / (animal + "-work-" + variant) : work;
-        if (own_work && !fs::exists(run_work)) fs::copy(work, run_work, fs::copy_options::recursive);
+        if (own_work) {  // fresh each time: an old copy may hold other earlier stages, or half a copy
+          const fs::path partial = run_work.string() + ".partial";
+          fs::remove_all(run_work);
+          fs::remove_all(partial);
+          fs::copy(work, partial, fs::copy_options::recursive);
+          fs::rename(partial, run_work);
+        }
         pipeline::ReconstructOptions ro;
         ro.scene = scene, ro.work = run_work, ro.quality = "draft";
         ro.run.to = "fur";
@@ -156,7 +165,8 @@ json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
                      {"stages", stage_seconds},
                      {"fur_seconds", m.at("seconds")}};
         // The baseline groom on the roots this run used: (a) on the pipeline's, (b) on the truth's.
-        metrics[variant == "truth_all" ? "baseline_b" : "baseline_a"] = groom_summary(m.at("baseline"));
+        const bool true_inputs = std::find(swaps.begin(), swaps.end(), "fur.truth=all") != swaps.end();
+        metrics[true_inputs ? "baseline_b" : "baseline_a"] = groom_summary(m.at("baseline"));
         json points = json::array();
         for (const json& c : m.at("curve"))
           if (c.contains("fscore")) points.push_back({c["seconds"], c["fscore"]["2cm_20deg"]});

@@ -8,6 +8,7 @@
 #include "engine/core/error.hpp"
 #include "engine/core/interrupt.hpp"
 #include "engine/core/log.hpp"
+#include "engine/core/output_guard.hpp"
 #include "engine/core/progress.hpp"
 #include "engine/gpu/context.hpp"
 #include "engine/io/ground_truth.hpp"
@@ -65,13 +66,18 @@ json ground_truth_metrics(const StageContext& c, const geometry::Mesh& mesh, con
 // `neus.mesh`: the user's envelope, checked against the masks' visual hull, becomes M_NeuS as it is
 // (no field, no renders: later stages read outer.ply only).
 json use_envelope_file(const StageContext& c, const neus::NeusQuality& q, const NeusOutputs& out) {
+  // The stages replace their folders under WORK: an envelope kept there could vanish under its user.
+  if (path_inside(q.mesh, c.work))
+    throw UsageError("neus.mesh=" + q.mesh + " lies inside the WORK folder " + c.work.string() +
+                     ", whose stage folders nf_gpu replaces; keep your envelope outside it");
   const auto t0 = std::chrono::steady_clock::now();
-  const neus::OccupancyGrid hull = neus::carve_visual_hull(c.scene, q.hull);
   neus::EnvelopeInputReport report;
-  const geometry::Mesh mesh = neus::read_envelope_input(q.mesh, hull, &report);
+  const geometry::Mesh mesh = neus::read_envelope_input(q.mesh, &report);  // format errors before the carve
+  const neus::OccupancyGrid hull = neus::carve_visual_hull(c.scene, q.hull);
+  neus::check_envelope_against_hull(mesh, hull, q.mesh, &report);
   io::write_mesh_ply(out.outer(), mesh);
   log::info("neus: M_NeuS from ", q.mesh, " (", report.triangles, " triangles, ", 100.0 * report.inside_hull,
-            " % of the vertices inside the masks' visual hull); no training");
+            " % of its surface inside the masks' visual hull); no training");
   json summary{{"source", "file"},
                {"file", fs::absolute(q.mesh).string()},
                {"envelope", neus::to_json(report)},
@@ -224,7 +230,14 @@ const SettingsSchema<neus::NeusQuality>& neus_settings() {
              "visual-hull cells along the longest axis of its box")
         .text("mesh", [](Q& q) -> auto& { return q.mesh; }, {},
               "an envelope of your own (PLY, OBJ or glTF in the scene's frame and units, e.g. a scan) used as M_NeuS instead of training")
-        .check([](const Q& q) { q.training.validate(); });
+        .check([](const Q& q) {
+          q.training.validate();
+          if (q.mesh.empty()) return;
+          if (!fs::is_regular_file(q.mesh)) throw UsageError("neus.mesh=" + q.mesh + ": no such file");
+          const std::string ext = fs::path(q.mesh).extension().string();  // as io::read_mesh tells formats
+          if (ext != ".ply" && ext != ".obj" && ext != ".glb" && ext != ".gltf")
+            throw UsageError("neus.mesh=" + q.mesh + ": not a mesh file nf_gpu reads (.ply, .obj, .glb, .gltf)");
+        });
     return s;
   }();
   return schema;

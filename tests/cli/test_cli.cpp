@@ -605,19 +605,26 @@ TEST_CASE("reconstruct: neus.mesh takes an envelope of the user's own, checked a
   const fs::path scene = root / "scene", work = root / "work";
   REQUIRE(run("synth --animal cat --views 8 --res 64 --strands 4000 --spp-axis 1 --out " + scene.string()).code == 0);
   const nf::geometry::Mesh truth = nf::io::read_mesh(scene / "gt" / "outer.ply");
-  // The user's files: the true envelope, the same with its faces turned inwards, in centimetres
-  // instead of the scene's metres, and shrunk to a fifth about its first vertex.
+  REQUIRE(truth.normals.size() == truth.positions.size());
+  // The user's files: the true envelope; the same turned inside out (winding and normals); in
+  // centimetres instead of the scene's metres; shrunk to a fifth about its box centre.
   const fs::path mine = root / "mine.ply", inverted = root / "inverted.ply", in_cm = root / "in_cm.ply", small = root / "small.ply";
   nf::io::write_mesh_ply(mine, truth);
   nf::geometry::Mesh m = truth;
   for (std::size_t t = 0; t < m.triangles.size(); t += 3) std::swap(m.triangles[t + 1], m.triangles[t + 2]);
-  m.normals.clear();
+  for (float& n : m.normals) n = -n;
   nf::io::write_mesh_ply(inverted, m);
   m = truth;
   for (float& x : m.positions) x *= 100.f;
   nf::io::write_mesh_ply(in_cm, m);
+  float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
+  for (std::size_t i = 0; i < truth.positions.size(); ++i)
+    lo[i % 3] = std::min(lo[i % 3], truth.positions[i]), hi[i % 3] = std::max(hi[i % 3], truth.positions[i]);
   m = truth;
-  for (std::size_t i = 0; i < m.positions.size(); ++i) m.positions[i] = truth.positions[i % 3] + 0.2f * (m.positions[i] - truth.positions[i % 3]);
+  for (std::size_t i = 0; i < m.positions.size(); ++i) {
+    const float centre = 0.5f * (lo[i % 3] + hi[i % 3]);
+    m.positions[i] = centre + 0.2f * (m.positions[i] - centre);
+  }
   nf::io::write_mesh_ply(small, m);
   const std::string mine_bytes = slurp(mine);
 
@@ -627,16 +634,17 @@ TEST_CASE("reconstruct: neus.mesh takes an envelope of the user's own, checked a
     return run("reconstruct --scene " + scene.string() + " --out " + work.string() + body + " --set neus.mesh=" + mesh.string() +
                " --to " + to + " --json");
   };
+  const auto stages_of = [](const Result& r) { return nf::json::parse(r.output.substr(r.output.find('['))); };
   const Result first = reconstruct(mine, "body");
   INFO(first.output);
   REQUIRE(first.code == 0);
-  const nf::json stages = nf::json::parse(first.output.substr(first.output.find('[')));
+  const nf::json stages = stages_of(first);
   REQUIRE(stages.size() == 2);
   const nf::json& ns = stages[0]["summary"];
   CHECK(ns["source"] == "file");
   CHECK(ns["envelope"]["inside_hull"].get<double>() == doctest::Approx(1.0));
   CHECK_FALSE(ns["envelope"]["flipped"].get<bool>());
-  CHECK(ns["ground_truth"]["chamfer_mm"]["mean"].get<double>() < 1e-3);  // M_NeuS is the file, unchanged
+  CHECK(ns["ground_truth"]["chamfer_mm"]["mean"].get<double>() < 1e-3);  // M_NeuS is the file's surface
   CHECK(nf::io::read_mesh(work / "neus" / "outer.ply").positions == truth.positions);
   CHECK_FALSE(fs::exists(work / "neus" / "model.nfwt"));  // nothing trained
   // The body stage fits the given envelope like a trained one.
@@ -645,29 +653,49 @@ TEST_CASE("reconstruct: neus.mesh takes an envelope of the user's own, checked a
 
   const Result same = reconstruct(mine, "neus");
   REQUIRE(same.code == 0);
-  CHECK(nf::json::parse(same.output.substr(same.output.find('[')))[0]["ran"] == false);  // the same file: skipped
+  CHECK(stages_of(same)[0]["ran"] == false);  // the same file: skipped
 
-  // Faces turned inwards are turned back (a warning), and the new file reruns the stage.
+  // The file's content is the key, not its name: an edited file at the same path reruns.
+  const fs::path edited = root / "edited.ply";
+  nf::io::write_mesh_ply(edited, truth);
+  REQUIRE(reconstruct(edited, "neus").code == 0);
+  m = truth;
+  for (std::size_t i = 1; i < m.positions.size(); i += 3) m.positions[i] += 0.002f;  // 2 mm up
+  nf::io::write_mesh_ply(edited, m);
+  const Result moved = reconstruct(edited, "neus");
+  REQUIRE(moved.code == 0);
+  CHECK(stages_of(moved)[0]["ran"] == true);
+  CHECK(nf::io::read_mesh(work / "neus" / "outer.ply").positions == m.positions);
+
+  // An inside-out file is turned back (a warning): the winding outwards again, and the normals
+  // follow the winding, whatever the file said.
   const Result turned = reconstruct(inverted, "neus");
   REQUIRE(turned.code == 0);
-  const nf::json t = nf::json::parse(turned.output.substr(turned.output.find('[')));
-  CHECK(t[0]["ran"] == true);
-  CHECK(t[0]["summary"]["envelope"]["flipped"].get<bool>());
-  CHECK(nf::io::read_mesh(work / "neus" / "outer.ply").triangles == truth.triangles);
+  CHECK(stages_of(turned)[0]["summary"]["envelope"]["flipped"].get<bool>());
+  const nf::geometry::Mesh outer = nf::io::read_mesh(work / "neus" / "outer.ply");
+  CHECK(outer.triangles == truth.triangles);
+  REQUIRE(outer.normals.size() == truth.normals.size());
+  double agree = 0;
+  for (std::size_t i = 0; i < outer.normals.size(); ++i) agree += double(outer.normals[i]) * truth.normals[i];
+  CHECK(agree / double(truth.vertex_count()) > 0.9);  // mean cosine to the true outward normals
 
-  // Another unit, or part of the animal: refused (exit 1, bad input), naming the file and the measured share; the
-  // previous M_NeuS stays.
+  // Another unit, or part of the animal: refused (exit 1, bad input), naming the file and the
+  // measured share; the previous M_NeuS stays.
   const Result cm = reconstruct(in_cm, "neus");
   CHECK(cm.code == 1);
-  CHECK(cm.output.find(in_cm.string()) != std::string::npos);
-  CHECK(cm.output.find("inside the visual hull of the masks") != std::string::npos);
+  CHECK(cm.output.find("neus.mesh=" + in_cm.string()) != std::string::npos);
+  CHECK(cm.output.find("of its surface lies inside the visual hull of the masks") != std::string::npos);
   const Result part = reconstruct(small, "neus");
   CHECK(part.code == 1);
-  CHECK(part.output.find("of the masks' visual hull (at least 50.0 %") != std::string::npos);
+  CHECK(part.output.find("of the masks' visual hull (50.0 % to 150.0 % needed)") != std::string::npos);
+  // No such file, or one inside WORK (whose folders nf_gpu replaces): refused before any stage.
   const Result missing = reconstruct(root / "no_such.ply", "neus");
-  CHECK(missing.code == 1);
-  CHECK(missing.output.find("no_such.ply") != std::string::npos);
-  CHECK(nf::io::read_mesh(work / "neus" / "outer.ply").triangles == truth.triangles);
+  CHECK(missing.code == 2);
+  CHECK(missing.output.find("neus.mesh=" + (root / "no_such.ply").string() + ": no such file") != std::string::npos);
+  const Result inside = reconstruct(work / "neus" / "outer.ply", "neus");
+  CHECK(inside.code == 2);
+  CHECK(inside.output.find("lies inside the WORK folder") != std::string::npos);
+  CHECK(nf::io::read_mesh(work / "neus" / "outer.ply").positions == truth.positions);
   CHECK(slurp(mine) == mine_bytes);  // the user's file is never written
   fs::remove_all(root);
 }
