@@ -58,7 +58,6 @@ double area_share_inside(const geometry::Mesh& m, const OccupancyGrid& grid) {
 
 geometry::Mesh read_envelope_input(const fs::path& file, EnvelopeInputReport* report) {
   const std::string where = "neus.mesh=" + file.string();
-  if (!fs::is_regular_file(file)) throw InputError(where + ": no such file");
   geometry::Mesh mesh = io::read_mesh(file);
   mesh.validate(file.string());
   if (mesh.triangle_count() == 0)

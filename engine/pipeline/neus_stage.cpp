@@ -232,11 +232,8 @@ const SettingsSchema<neus::NeusQuality>& neus_settings() {
               "an envelope of your own (PLY, OBJ or glTF in the scene's frame and units, e.g. a scan) used as M_NeuS instead of training")
         .check([](const Q& q) {
           q.training.validate();
-          if (q.mesh.empty()) return;
-          if (!fs::is_regular_file(q.mesh)) throw UsageError("neus.mesh=" + q.mesh + ": no such file");
-          const std::string ext = fs::path(q.mesh).extension().string();  // as io::read_mesh tells formats
-          if (ext != ".ply" && ext != ".obj" && ext != ".glb" && ext != ".gltf")
-            throw UsageError("neus.mesh=" + q.mesh + ": not a mesh file nf_gpu reads (.ply, .obj, .glb, .gltf)");
+          // The format is io::read_mesh's to judge, when the stage reads the file.
+          if (!q.mesh.empty() && !fs::is_regular_file(q.mesh)) throw UsageError("neus.mesh=" + q.mesh + ": no such file");
         });
     return s;
   }();

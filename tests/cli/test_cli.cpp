@@ -692,6 +692,11 @@ TEST_CASE("reconstruct: neus.mesh takes an envelope of the user's own, checked a
   const Result missing = reconstruct(root / "no_such.ply", "neus");
   CHECK(missing.code == 2);
   CHECK(missing.output.find("neus.mesh=" + (root / "no_such.ply").string() + ": no such file") != std::string::npos);
+  const fs::path text = root / "mine.txt";
+  fs::copy_file(mine, text);
+  const Result unknown = reconstruct(text, "neus");  // io::read_mesh judges the format
+  CHECK(unknown.code == 1);
+  CHECK(unknown.output.find("unknown mesh format '.txt'") != std::string::npos);
   const Result inside = reconstruct(work / "neus" / "outer.ply", "neus");
   CHECK(inside.code == 2);
   CHECK(inside.output.find("lies inside the WORK folder") != std::string::npos);
