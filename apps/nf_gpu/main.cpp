@@ -27,6 +27,7 @@
 #include "engine/orient/scene_orientation.hpp"
 #include "engine/pipeline/stages.hpp"
 #include "engine/synth/synth_scene.hpp"
+#include "engine/synth/world_frame.hpp"
 
 namespace {
 
@@ -401,6 +402,9 @@ int main(int argc, char** argv) {
   synth->add_option("--strands", synth_options.strands, "ground-truth strands (default 100000)")->check(CLI::Range(1, 20000000));
   synth->add_option("--spp-axis", synth_options.samples_per_axis, "anti-aliasing: s x s samples per pixel (default 3)")->check(CLI::Range(1, 16));
   synth->add_option("--out", synth_out, "output folder (must be new, or an earlier synth scene with --overwrite)")->required();
+  synth->add_option("--frame", synth_options.frame,
+                    "world frame of the files: y-up-m (default) or z-up-mm (z up, millimetres, metres from the origin); the photos are the same")
+      ->check(CLI::IsMember(nf::synth::world_frame_names()));
   synth->add_flag("--overwrite", synth_options.overwrite, "replace an earlier synth scene in --out");
 
   nf::synth::PreviewOptions render_options;

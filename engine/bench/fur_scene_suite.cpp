@@ -10,9 +10,11 @@
 #include "engine/bench/scratch_folder.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/log.hpp"
+#include "engine/core/text.hpp"
 #include "engine/pipeline/fur_stage.hpp"
 #include "engine/pipeline/stages.hpp"
 #include "engine/synth/synth_scene.hpp"
+#include "engine/synth/world_frame.hpp"
 
 namespace nf::bench {
 namespace fs = std::filesystem;
@@ -100,17 +102,24 @@ json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
   for (const std::string& p : presets)
     if (p != "draft" && p != "default" && p != "paper") throw UsageError("NF_BENCH_FUR_PRESETS: unknown preset '" + p + "' (draft, default, paper)");
   const double curve_seconds = options.quick ? 10 : 60;
+  // NF_BENCH_FUR_FRAME: the world frame the scenes are written in (synth --frame), so the whole
+  // bench can be run in a studio's z-up millimetres and compared with the default y-up metres.
+  const char* frame_env = std::getenv("NF_BENCH_FUR_FRAME");
+  const std::string frame = frame_env && *frame_env ? frame_env : "y-up-m";
+  if (const auto names = synth::world_frame_names(); std::find(names.begin(), names.end(), frame) == names.end())
+    throw UsageError("NF_BENCH_FUR_FRAME: unknown frame '" + frame + "' (" + join(names) + ")");
 
   json records = json::array();
   for (const std::string& animal : animals) {
-    const fs::path scene = root / animal, work = root / (animal + "-work");
+    const std::string named = frame == "y-up-m" ? animal : animal + "-" + frame;
+    const fs::path scene = root / named, work = root / (named + "-work");
     synth::SynthOptions so;
-    so.animal = animal, so.seed = 1;
+    so.animal = animal, so.seed = 1, so.frame = frame;
     so.views = options.quick ? 12 : 36;
     so.resolution = options.quick ? 128 : 512;
     so.strands = options.quick ? 20000 : 100000;
     if (!fs::exists(scene / "gt" / "scene.json")) synth::synthesize_scene(scene, so);
-    const json scene_params{{"animal", animal}, {"views", so.views}, {"resolution", so.resolution}, {"gt_strands", so.strands}};
+    const json scene_params{{"animal", animal}, {"frame", frame}, {"views", so.views}, {"resolution", so.resolution}, {"gt_strands", so.strands}};
 
     for (std::size_t p = 0; p < presets.size(); ++p) {
       // The earlier stages at draft (the same surface, body and roots for every preset and
@@ -126,7 +135,7 @@ json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
         // A variant that changes a stage before fur works in its own copy of the preset run's WORK,
         // so the shared earlier stages stay as they are for the other runs.
         const bool own_work = sets_stage(swaps, "neus") || sets_stage(swaps, "knowledge");
-        const fs::path run_work = own_work ? root / (animal + "-work-" + variant) : work;
+        const fs::path run_work = own_work ? root / (named + "-work-" + variant) : work;
         if (own_work) {  // fresh each time: an old copy may hold other earlier stages, or half a copy
           const fs::path partial = run_work.string() + ".partial";
           fs::remove_all(run_work);
@@ -147,7 +156,7 @@ json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
         ro.settings.push_back("fur.preview_views=0");
         if (options.quick) ro.settings.insert(ro.settings.end(), {"fur.steps=60", "fur.warm_steps=10", "fur.batch=1500", "fur.resolution=128"});
         ro.settings.insert(ro.settings.end(), swaps.begin(), swaps.end());
-        log::info("bench fur: ", animal, ", preset ", presets[p], variant.empty() ? "" : ", variant " + variant);
+        log::info("bench fur: ", named, ", preset ", presets[p], variant.empty() ? "" : ", variant " + variant);
         const std::vector<pipeline::StageOutcome> outcomes = pipeline::reconstruct(ctx, ro);
         const json m = read_json(pipeline::fur_outputs(run_work).metrics());
 
@@ -177,7 +186,7 @@ json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
         params["earlier_stages"] = "draft";
         Timing timing;
         timing.seconds = {m.at("seconds_total").get<double>()};
-        json record = make_record(ctx, "fur", animal + "_" + presets[p] + (variant.empty() ? "" : "_" + variant), params, timing, metrics);
+        json record = make_record(ctx, "fur", named + "_" + presets[p] + (variant.empty() ? "" : "_" + variant), params, timing, metrics);
         record["curve"] = {{"x", "training seconds"}, {"y", "F-score at (2 cm, 20 deg), %"}, {"points", points}};
         records.push_back(record);
       }

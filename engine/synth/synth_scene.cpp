@@ -25,6 +25,7 @@
 #include "engine/synth/fur_envelope.hpp"
 #include "engine/synth/fur_growth.hpp"
 #include "engine/synth/strand_renderer.hpp"
+#include "engine/synth/world_frame.hpp"
 
 namespace nf::synth {
 
@@ -62,6 +63,7 @@ void check_destination(const fs::path& out, bool overwrite) {
 json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
   if (o.views == 0 || o.resolution < 8 || o.resolution > 8192) throw UsageError("synth: --views must be >= 1 and --res in [8, 8192]");
   if (o.strands == 0) throw UsageError("synth: --strands must be >= 1");
+  const WorldFrame frame = world_frame(o.frame);
   // "scenes/cat/" and "scenes/./cat" name the same folder; the temp folder sits beside it.
   fs::path out_dir = fs::absolute(requested_out).lexically_normal();
   if (!out_dir.has_filename()) out_dir = out_dir.parent_path();
@@ -156,12 +158,20 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
   progress.finish();
   timings["render_s"] = clock.lap();
 
-  // Ground truth and cameras.
+  // Ground truth and cameras, in the asked world frame (the photos do not change with it).
+  const auto to_world = [&](geometry::Mesh mesh) {
+    transform_mesh(frame, mesh);
+    return mesh;
+  };
+  for (io::Camera& cam : scene.cameras) transform_camera(frame, cam);
+  scene.cm_per_unit = kCmPerUnit / frame.scale;
+  transform_strands(frame, fur.strands);
+  const geometry::Mesh bald_world = to_world(bald);
   io::write_transforms_json(out / "transforms.json", scene);
   io::write_hair(out / "gt" / "strands.hair", fur.strands);
-  io::write_mesh(out / "gt" / "bald.ply", bald);
-  io::write_mesh(out / "gt" / "body.glb", bald);
-  io::write_mesh(out / "gt" / "outer.ply", envelope.mesh);
+  io::write_mesh(out / "gt" / "bald.ply", bald_world);
+  io::write_mesh(out / "gt" / "body.glb", bald_world);
+  io::write_mesh(out / "gt" / "outer.ply", to_world(envelope.mesh));
   knowledge::write_knowledge(out / "gt" / "knowledge.json", know);
   json region_names = json::array();
   for (auto name : body::kRegionNames) region_names.push_back(std::string(name));
@@ -173,17 +183,18 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
       {"generator", "nf_gpu synth"},
       {"animal", o.animal},
       {"seed", o.seed},
-      {"cm_per_unit", kCmPerUnit},
-      {"eye_centres", {{"left", json_vec3(eyes.left)}, {"right", json_vec3(eyes.right)}}},
+      {"frame", frame.name},
+      {"cm_per_unit", kCmPerUnit / frame.scale},
+      {"eye_centres", {{"left", json_vec3(glm::vec3(frame.point(glm::dvec3(eyes.left))))}, {"right", json_vec3(glm::vec3(frame.point(glm::dvec3(eyes.right))))}}},
       {"eye_distance_cm", know.eye_distance_cm},
-      {"animal_to_world", json_matrix_rows(params.animal_to_world)},
+      {"animal_to_world", json_matrix_rows(glm::mat4(frame.matrix() * glm::dmat4(params.animal_to_world)))},
       {"region_names", region_names},
       {"strands", {{"count", fur.strands.strand_count()}, {"points_per_strand", o.points_per_strand},
-                   {"render_radius", look.radius}}},
+                   {"render_radius", look.radius * frame.scale}}},
       {"body", {{"model", model.name}, {"vertices", bald.vertex_count()}, {"triangles", bald.triangle_count()},
                 {"shape", shape}, {"joint_rotations", rotations}, {"torso_length", proportions.torso_length}}},
       {"outer", {{"method", "morphological closing of body + strands, then marching cubes"},
-                 {"voxel", envelope.voxel}, {"closing_radius", envelope.closing_radius},
+                 {"voxel", envelope.voxel * frame.scale}, {"closing_radius", envelope.closing_radius * frame.scale},
                  {"vertices", envelope.mesh.vertex_count()}}},
       {"render", {{"views", o.views}, {"resolution", o.resolution}, {"samples_per_pixel", o.samples_per_axis * o.samples_per_axis},
                   {"mean_mask_coverage", coverage_sum / (double(o.views) * o.resolution * o.resolution)}}},

@@ -22,6 +22,10 @@ struct SynthOptions {
   std::uint32_t points_per_strand = 100;
   std::uint32_t samples_per_axis = 3;  // anti-aliasing: s x s samples per pixel
   float body_voxel = 0;                // metres; 0: the body model's default
+  // The world frame the files are written in (world_frame.hpp): "y-up-m" (y up, metres) or
+  // "z-up-mm" (z up, millimetres, the animal metres from the origin). The animal, the photos and
+  // the masks are the same in both; only the coordinates of everything else change.
+  std::string frame = "y-up-m";
   bool overwrite = false;              // replace an existing synth output folder
 };
 
