@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "engine/core/error.hpp"
+#include "engine/geometry/mesh_tools.hpp"
 
 namespace nf::exporter {
 
@@ -43,14 +44,7 @@ ExportFrame export_frame(const glm::dmat4& animal_to_world, double cm_per_unit, 
 
 geometry::Mesh to_export(const geometry::Mesh& mesh, const ExportFrame& frame) {
   geometry::Mesh out = mesh;
-  for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
-    const glm::vec3 p = frame.point(mesh.position(v));
-    out.positions[3 * v] = p.x, out.positions[3 * v + 1] = p.y, out.positions[3 * v + 2] = p.z;
-    if (!mesh.normals.empty()) {
-      const glm::vec3 n = frame.direction({mesh.normals[3 * v], mesh.normals[3 * v + 1], mesh.normals[3 * v + 2]});
-      out.normals[3 * v] = n.x, out.normals[3 * v + 1] = n.y, out.normals[3 * v + 2] = n.z;
-    }
-  }
+  geometry::transform_mesh(out, frame.world_to_export);
   return out;
 }
 

@@ -161,4 +161,21 @@ bool is_closed_manifold(const geometry::Mesh& mesh) {
   return true;
 }
 
+void transform_points(std::vector<float>& xyz, const glm::dmat4& similarity) {
+  for (std::size_t i = 0; i + 2 < xyz.size(); i += 3) {
+    const glm::dvec4 p = similarity * glm::dvec4(xyz[i], xyz[i + 1], xyz[i + 2], 1.0);
+    for (std::size_t a = 0; a < 3; ++a) xyz[i + a] = float(p[int(a)]);
+  }
+}
+
+void transform_mesh(geometry::Mesh& mesh, const glm::dmat4& similarity) {
+  transform_points(mesh.positions, similarity);
+  const glm::dmat3 turn(similarity);
+  for (std::size_t i = 0; i + 2 < mesh.normals.size(); i += 3) {
+    const glm::dvec3 n = turn * glm::dvec3(mesh.normals[i], mesh.normals[i + 1], mesh.normals[i + 2]);
+    const double length = glm::length(n);
+    for (std::size_t a = 0; a < 3; ++a) mesh.normals[i + a] = length > 0 ? float(n[int(a)] / length) : 0.f;
+  }
+}
+
 }  // namespace nf::geometry

@@ -1,6 +1,6 @@
 #pragma once
 // Small triangle-mesh utilities: connected components, vertex normals, the bounding box, a
-// closed-manifold check.
+// closed-manifold check, a change of frame.
 #include <algorithm>
 #include <cstddef>
 
@@ -32,5 +32,10 @@ Bounds mesh_bounds(const geometry::Mesh& mesh);
 // (consistent orientation), no triangle repeats a vertex, and the triangles around every used
 // vertex form a single fan (no pinched vertices). An empty mesh is closed.
 bool is_closed_manifold(const geometry::Mesh& mesh);
+
+// A change of frame by a similarity (rotation times a uniform scale, then a translation): xyz
+// triples in place; a mesh's positions, and its normals turned by the rotation (unit length kept).
+void transform_points(std::vector<float>& xyz, const glm::dmat4& similarity);
+void transform_mesh(geometry::Mesh& mesh, const glm::dmat4& similarity);
 
 }  // namespace nf::geometry

@@ -15,6 +15,7 @@
 #include "engine/core/error.hpp"
 #include "engine/core/log.hpp"
 #include "engine/core/progress.hpp"
+#include "engine/geometry/mesh_tools.hpp"
 #include "engine/io/image.hpp"
 #include "engine/io/mesh.hpp"
 #include "engine/io/scene.hpp"
@@ -160,7 +161,7 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
 
   // Ground truth and cameras, in the asked world frame (the photos do not change with it).
   const auto to_world = [&](geometry::Mesh mesh) {
-    transform_mesh(frame, mesh);
+    geometry::transform_mesh(mesh, frame.matrix());
     return mesh;
   };
   for (io::Camera& cam : scene.cameras) transform_camera(frame, cam);

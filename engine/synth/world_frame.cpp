@@ -2,6 +2,7 @@
 
 #include "engine/core/error.hpp"
 #include "engine/core/text.hpp"
+#include "engine/geometry/mesh_tools.hpp"
 
 namespace nf::synth {
 
@@ -27,22 +28,8 @@ WorldFrame world_frame(const std::string& name) {
   throw UsageError("synth: unknown --frame '" + name + "' (" + join(world_frame_names()) + ")");
 }
 
-void transform_mesh(const WorldFrame& frame, geometry::Mesh& mesh) {
-  for (std::size_t i = 0; i + 2 < mesh.positions.size(); i += 3) {
-    const glm::dvec3 p = frame.point({mesh.positions[i], mesh.positions[i + 1], mesh.positions[i + 2]});
-    for (int a = 0; a < 3; ++a) mesh.positions[i + std::size_t(a)] = float(p[a]);
-  }
-  for (std::size_t i = 0; i + 2 < mesh.normals.size(); i += 3) {
-    const glm::dvec3 n = frame.direction({mesh.normals[i], mesh.normals[i + 1], mesh.normals[i + 2]});
-    for (int a = 0; a < 3; ++a) mesh.normals[i + std::size_t(a)] = float(n[a]);
-  }
-}
-
 void transform_strands(const WorldFrame& frame, io::StrandSet& strands) {
-  for (std::size_t i = 0; i + 2 < strands.points.size(); i += 3) {
-    const glm::dvec3 p = frame.point({strands.points[i], strands.points[i + 1], strands.points[i + 2]});
-    for (int a = 0; a < 3; ++a) strands.points[i + std::size_t(a)] = float(p[a]);
-  }
+  geometry::transform_points(strands.points, frame.matrix());
   for (float& t : strands.thickness) t = float(t * frame.scale);
 }
 

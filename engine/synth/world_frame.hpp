@@ -9,7 +9,6 @@
 
 #include <glm/glm.hpp>
 
-#include "engine/geometry/mesh.hpp"
 #include "engine/io/scene.hpp"
 #include "engine/io/strands.hpp"
 
@@ -25,16 +24,15 @@ struct WorldFrame {
   glm::dvec3 point(const glm::dvec3& p) const { return scale * (rotation * p) + offset; }
   glm::dvec3 direction(const glm::dvec3& d) const { return rotation * d; }
   glm::dmat4 matrix() const;  // the similarity as a 4 x 4 matrix
-  bool identity() const { return name == "y-up-m"; }
 };
 
 // "y-up-m" or "z-up-mm"; UsageError naming the others for anything else.
 WorldFrame world_frame(const std::string& name);
 std::vector<std::string> world_frame_names();
 
-// In place: positions and (rotated) normals; strand points and per-point thickness; a camera's
-// pose (its rotation turned, its centre moved; intrinsics unchanged, so its photo stays right).
-void transform_mesh(const WorldFrame& frame, geometry::Mesh& mesh);
+// In place (meshes: geometry::transform_mesh with frame.matrix()): strand points and per-point
+// thickness; a camera's pose (its rotation turned, its centre moved; intrinsics unchanged, so its
+// photo stays right).
 void transform_strands(const WorldFrame& frame, io::StrandSet& strands);
 void transform_camera(const WorldFrame& frame, io::Camera& camera);
 
