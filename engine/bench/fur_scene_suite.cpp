@@ -170,6 +170,8 @@ json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
                      {"pass_seconds_last_step", m["final"].value("pass_seconds", json::object())},
                      {"skipped_steps", m.at("skipped_steps")},
                      {"orientation_reliability", m["views"]["orientation_reliability"]},
+                     {"fur_pixels_median", m["views"]["fur_pixels_median"]},
+                     {"image_weight_mean", m["views"]["image_weight_mean"]},
                      {"rendered_fraction_of_photo", m["views"]["rendered_fraction_of_photo"]},
                      {"stages", stage_seconds},
                      {"fur_seconds", m.at("seconds")}};

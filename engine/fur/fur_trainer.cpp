@@ -8,6 +8,7 @@
 #include "engine/core/error.hpp"
 #include "engine/core/log.hpp"
 #include "engine/core/stopwatch.hpp"
+#include "engine/fur/fur_resolution.hpp"
 #include "engine/fur/prior_training.hpp"
 #include "engine/fur/strand_chamfer.hpp"
 #include "engine/fur/strand_losses.hpp"
@@ -52,6 +53,7 @@ void FurTrainingOptions::validate() const {
   if (!(lr > 0) || !(lr_floor >= 0 && lr_floor <= 1)) fail("lr must be positive and lr_floor in [0, 1]");
   if (!(strand_width >= 0)) fail("strand_width must be 0 (from the data) or positive");
   if (!(coverage > 0)) fail("coverage must be positive");
+  if (!(resolved_fur_px >= 0 && std::isfinite(resolved_fur_px))) fail("resolved_fur_px must be finite and non-negative");
   if (!(lying_angle_deg >= 0 && lying_angle_deg <= 90)) fail("lying_angle_deg must be in [0, 90]");
   for (double w : {weights.silhouette, weights.orientation, weights.direction, weights.chamfer, weights.penetration, weights.curvature})
     if (!(w >= 0 && std::isfinite(w))) fail("loss weights must be finite and non-negative");
@@ -67,6 +69,7 @@ json to_json(const FurTrainingOptions& o) {
           {"lr_floor", o.lr_floor},
           {"weight_decay", o.weight_decay},
           {"image_ramp_steps", o.image_ramp_steps},
+          {"resolved_fur_px", o.resolved_fur_px},
           {"weights", to_json(o.weights)},
           {"chamfer_queries", o.chamfer_queries},
           {"strand_width", o.strand_width},
@@ -90,7 +93,7 @@ json to_json(const FurStepReport& r) {
          {"grad_norm", r.grad_norm},
          {"skipped_steps", r.skipped_steps},
          {"seconds", r.seconds}};
-  if (!r.warm) j["view"] = r.view;
+  if (r.image) j["view"] = r.view;
   if (!r.pass_seconds.is_null()) j["pass_seconds"] = r.pass_seconds;
   return j;
 }
@@ -183,6 +186,11 @@ FurTrainer::FurTrainer(gpu::Context& context, const FurTrainingData& data, Stran
   double total = 0;
   for (float l : data.roots.length) total += l;
   mean_root_length_ = total / double(data.roots.size());
+  for (std::uint32_t v = 0; v < data.train.size(); ++v) {
+    const double px = fur_length_pixels(data.train[v], data.roots);
+    resolution_.push_back({px, image_loss_weight(px, options_.resolved_fur_px)});
+    if (resolution_.back().image_weight > 0) image_views_.push_back(v);
+  }
   field_ = std::make_unique<FurField>(context, field, prior, root_box(data.roots), options.seed);
   if (options.warm_start) {
     const std::vector<float> z = lifted_strand_latent(prior, options.lying_angle_deg);
@@ -236,10 +244,12 @@ FurStepReport FurTrainer::train_step() {
   const splat::StrandShape shape{m.batch.strands, kStrandPoints};
   const double radius = data_.scene_radius;
   const FurView* view = nullptr;
-  if (!r.warm) {
+  double weight = 0;  // the view's image weight
+  if (!r.warm && !image_views_.empty()) {
     std::mt19937_64 rng(seed ^ 0x5bd1e995ull);
-    r.view = std::uint32_t(std::uniform_int_distribution<std::size_t>(0, data_.train.size() - 1)(rng));
+    r.view = image_views_[std::uniform_int_distribution<std::size_t>(0, image_views_.size() - 1)(rng)];
     view = &data_.train[r.view];
+    weight = resolution_[r.view].image_weight;
     t.restart();
     if (m.uploaded_view != r.view) m.upload_view(*view), m.uploaded_view = r.view;
     const std::uint64_t px = view->pixels();
@@ -249,7 +259,7 @@ FurStepReport FurTrainer::train_step() {
     m.rasterizer.forward(shape, m.batch.points, m.batch.confidence, splat::raster_camera(view->crop, near, far), params,
                          m.depth->range(0, px), m.image->range(0, 5 * px));
     passes["raster_forward"] = t.seconds();
-    r.view = view->camera;
+    r.view = view->camera, r.image = true;
 
     t.restart();
     const splat::ImageSize size{view->crop.width, view->crop.height};
@@ -259,8 +269,8 @@ FurStepReport FurTrainer::train_step() {
     stream.fill(m.grad_image->range(4 * px, px), 0u);  // no loss on the depth channel
     const splat::ImageLossGradientBuffers grads{m.grad_image->range(0, px), m.grad_image->range(px, 2 * px), m.grad_image->range(3 * px, px)};
     splat::image_losses_forward(stream, size, {}, in, targets, m.losses);
-    splat::image_losses_backward(stream, size, {}, in, targets, m.losses, float(options_.weights.silhouette),
-                                 float(options_.weights.orientation * view->orientation_reliability), grads);
+    splat::image_losses_backward(stream, size, {}, in, targets, m.losses, float(weight * options_.weights.silhouette),
+                                 float(weight * options_.weights.orientation * view->orientation_reliability), grads);
     m.rasterizer.backward(stream, m.grad_image->range(0, 5 * px), m.batch.grad_points, m.batch.grad_confidence, false);
     stream.submit_and_wait();
     passes["image_losses_and_raster_backward"] = t.seconds();
@@ -272,7 +282,8 @@ FurStepReport FurTrainer::train_step() {
   StrandLossBatch lb{m.loss_shape, m.grid, m.batch.points, m.guides, m.lengths, m.sdf};
   StrandLossWeights w{options_.weights.direction, r.warm ? 0.0 : options_.weights.curvature, options_.weights.penetration / radius};
   strand_losses_forward(stream, lb, m.loss_scratch);
-  strand_losses_backward(stream, lb, m.loss_scratch, w, m.batch.grad_points, !r.warm);
+  // Onto the rasteriser's gradient when the image losses ran; else it starts the points' gradient.
+  strand_losses_backward(stream, lb, m.loss_scratch, w, m.batch.grad_points, view != nullptr);
   const bool chamfer = !r.warm && m.chamfer_queries > 0 && options_.weights.chamfer > 0;
   if (chamfer) {
     std::vector<float> q(m.chamfer_queries * 3);
@@ -302,9 +313,9 @@ FurStepReport FurTrainer::train_step() {
   t.restart();
   const std::array<double, 3> geo = strand_loss_values(m.loss_scratch, m.loss_shape);
   r.direction = geo[0], r.curvature = geo[1], r.penetration = geo[2];
-  if (!r.warm) {
+  if (view) {
     const std::vector<float> l = m.losses.download();
-    r.silhouette = l[0], r.orientation = l[1] * view->orientation_reliability;  // as it enters the loss
+    r.silhouette = weight * l[0], r.orientation = weight * l[1] * view->orientation_reliability;  // as they enter the loss
   }
   if (chamfer) {
     const ChamferValue cv = strand_chamfer_value(m.chamfer_scratch);
@@ -430,6 +441,7 @@ FurStepReport report_from_json(const json& j) {
   FurStepReport r;
   r.step = j.at("step").get<std::uint32_t>();
   r.warm = j.at("warm").get<bool>();
+  r.image = j.contains("view");
   r.view = j.value("view", 0u);
   for (auto [name, field] : {std::pair{"loss", &r.loss}, {"silhouette", &r.silhouette}, {"orientation", &r.orientation},
                              {"direction", &r.direction}, {"chamfer", &r.chamfer}, {"penetration", &r.penetration},

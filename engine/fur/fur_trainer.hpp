@@ -60,6 +60,9 @@ struct FurTrainingOptions {
   // removed the dip at step 60-70 (F(2 mm, 20°) 38.9 against 25.2) and reached 40 a minute sooner,
   // but ended 1.9 points lower (40.2 against 42.1; docs/fur-stage.md), so it is off by default.
   std::uint32_t image_ramp_steps = 0;
+  // The fur length in photo pixels from which a view's image losses weigh fully; they fade to
+  // nothing at half of it (fur_resolution.hpp). 0: every view weighs fully.
+  double resolved_fur_px = 4.8;
   FurLossWeights weights;
   std::uint32_t chamfer_queries = 10000;  // points of M_NeuS per step
   // The splats' sigma across a strand. 0 (default): from the data, so that the step's strands cover
@@ -89,8 +92,9 @@ struct FurTrainingData {
 
 struct FurStepReport {
   std::uint32_t step = 0;  // steps done
-  std::uint32_t view = 0;  // camera of the step (image phase)
+  std::uint32_t view = 0;  // camera of the step (when `image`)
   bool warm = false;       // a warm-start step (geometric losses only)
+  bool image = false;      // the image losses ran (after the warm-up, on a view that resolves the fur)
   double loss = 0, silhouette = 0, orientation = 0, direction = 0, chamfer = 0, penetration = 0, curvature = 0;
   std::uint64_t chamfer_unmatched = 0;
   float lr = 0, grad_norm = 0;
@@ -99,6 +103,13 @@ struct FurStepReport {
   json pass_seconds;   // per pass of this step (host-timed)
 };
 json to_json(const FurStepReport& r);
+
+// How well a training view's photo resolves the fur (fur_resolution.hpp): its image losses are
+// scaled by image_weight, and a view of weight 0 is not rendered in training.
+struct ViewResolution {
+  double fur_pixels = 0;  // the median fur length in photo pixels
+  double image_weight = 1;
+};
 
 // How the field's strands look from a view against its targets.
 struct ViewScore {
@@ -131,6 +142,7 @@ class FurTrainer {
   const std::vector<FurStepReport>& history() const { return history_; }
   double strand_width(std::uint32_t strands) const;  // scene units, for a rendering of `strands` strands
   std::uint32_t batch() const;                       // strands per step
+  const std::vector<ViewResolution>& view_resolution() const { return resolution_; }  // per training view
 
   // Trains until `until` steps are done (capped at options.steps); `after_step` may stop it by
   // returning false. Checkpoints go to `checkpoint` (when not empty) every checkpoint_interval
@@ -159,6 +171,8 @@ class FurTrainer {
   gpu::Context& context_;
   const FurTrainingData& data_;
   double mean_root_length_ = 1;  // of data_.roots (the splat width's denominator), computed once
+  std::vector<ViewResolution> resolution_;  // per training view
+  std::vector<std::uint32_t> image_views_;  // the training views of image weight > 0
   FurTrainingOptions options_;
   FurFieldConfig field_config_;
   std::unique_ptr<FurField> field_;

@@ -87,6 +87,7 @@ FurView make_fur_view(gpu::Context& gpu, const io::Scene& scene, std::uint32_t c
   FurView v;
   v.camera = camera;
   v.crop = scaled_crop(cam, sx, sy, x0, y0, x1 - x0, y1 - y0);
+  v.scale = std::sqrt(sx * sy);
   const std::uint64_t n = v.pixels();
   v.mask.assign(n, 0.f), v.silhouette_weight.assign(n, 0.f), v.orientation_weight.assign(n, 0.f);
   v.gabor_angle.assign(n, 0.f), v.gabor_confidence.assign(n, 0.f), v.rgb.assign(3 * n, 0.f);

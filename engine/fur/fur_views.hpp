@@ -52,6 +52,7 @@ struct FurView {
   std::vector<float> mask, silhouette_weight, orientation_weight, gabor_angle, gabor_confidence, body_depth;
   std::vector<float> rgb;  // the photo at the crop (3 per pixel), for previews
   double orientation_reliability = 0;
+  double scale = 1;  // rendering pixels per photo pixel
   std::uint64_t pixels() const { return std::uint64_t(crop.width) * crop.height; }
 };
 

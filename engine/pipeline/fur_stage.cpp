@@ -181,6 +181,38 @@ json curve_point(fur::FurTrainer& trainer, const fur::FurTrainingData& data, con
   return p;
 }
 
+// Says in the log how many photo pixels the fur spans and what that does to the image losses
+// (fur_resolution.hpp); returns the figures for metrics.json.
+json log_fur_resolution(const std::vector<fur::ViewResolution>& views, double resolved_px) {
+  if (views.empty()) return {{"fur_pixels_median", 0.0}, {"image_weight_mean", 0.0}, {"views_without_image_losses", 0}};
+  std::vector<double> px;
+  double weight = 0;
+  std::size_t partly = 0, off = 0;
+  for (const fur::ViewResolution& v : views) {
+    px.push_back(v.fur_pixels), weight += v.image_weight / double(views.size());
+    partly += v.image_weight > 0 && v.image_weight < 1, off += v.image_weight == 0;
+  }
+  std::sort(px.begin(), px.end());
+  const double median = px[px.size() / 2];
+  char line[400];
+  std::snprintf(line, sizeof line, "fur: the fur spans %.1f photo pixels (median over the %zu training views)", median, views.size());
+  log::info(line);
+  if (off == views.size()) {
+    std::snprintf(line, sizeof line,
+                  "fur: no photo resolves the fur (%.1f px long; the image losses fade in from %.1f px and weigh fully from %.1f): "
+                  "they are off, and the groom follows the knowledge, M_bald and M_NeuS; photos where the fur spans %.1f px or more let them correct it",
+                  median, resolved_px / 2, resolved_px, resolved_px);
+    log::warn(line);
+  } else if (partly + off > 0) {
+    std::snprintf(line, sizeof line,
+                  "fur: %zu of %zu training views resolve the fur only partly (full weight from %.1f px): their image losses are weighted "
+                  "down (mean weight %.2f), %zu view(s) not rendered",
+                  partly + off, views.size(), resolved_px, weight, off);
+    log::warn(line);
+  }
+  return {{"fur_pixels_median", median}, {"image_weight_mean", weight}, {"views_without_image_losses", off}};
+}
+
 }  // namespace
 
 FurSettings fur_quality_preset(const std::string& quality) {
@@ -337,6 +369,7 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
   std::unique_ptr<fur::StrandPrior> prior = fur::shipped_strand_prior(c.gpu);
   auto make_trainer = [&] { return std::make_unique<fur::FurTrainer>(c.gpu, data, *prior, s.field, s.training); };
   std::unique_ptr<fur::FurTrainer> trainer = make_trainer();
+  const json resolution = log_fur_resolution(trainer->view_resolution(), s.training.resolved_fur_px);
   const fs::path checkpoint = resume / "checkpoint.nfwt";
   const fs::path curve_checkpoint = resume / "curve.jsonl";
   std::string curve_lines;  // curve.jsonl so far, kept beside the checkpoint
@@ -518,6 +551,8 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
                {"skipped_steps", last.skipped_steps},
                {"final", fur::to_json(last)},
                {"views", {{"train", data.train.size()}, {"held_out", data.held_out.size()}, {"orientation_reliability", reliability},
+                          {"fur_pixels_median", resolution["fur_pixels_median"]}, {"image_weight_mean", resolution["image_weight_mean"]},
+                          {"views_without_image_losses", resolution["views_without_image_losses"]},
                           {"rendered_pixels_per_view", rendered / std::max<std::size_t>(1, data.train.size())},
                           {"rendered_fraction_of_photo", full ? double(rendered) / double(full) : 0.0}}},
                {"held_out", held_json},
@@ -557,6 +592,8 @@ const SettingsSchema<FurSettings>& fur_settings() {
         .add("weight_decay", [](F& f) -> auto& { return f.training.weight_decay; }, 0, 1, "AdamW weight decay")
         .add("image_ramp_steps", [](F& f) -> auto& { return f.training.image_ramp_steps; }, 0, 1e8,
              "steps over which the learning rate ramps up when the image losses start (0: none)")
+        .add("resolved_fur_px", [](F& f) -> auto& { return f.training.resolved_fur_px; }, 0, 1e6,
+             "fur length in photo pixels from which a view's image losses weigh fully; none at half of it (0: always fully)")
         .add("silhouette_weight", [](F& f) -> auto& { return f.training.weights.silhouette; }, 0, 1e9, "silhouette L1 (0: off)")
         .add("orientation_weight", [](F& f) -> auto& { return f.training.weights.orientation; }, 0, 1e9,
              "orientation against the Gabor maps with rendered confidence (0: off)")

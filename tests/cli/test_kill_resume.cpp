@@ -68,7 +68,7 @@ TEST_CASE("reconstruct survives SIGKILL at random moments in every stage and end
       " --set neus.hull_resolution=48 --set body.samples=2000 --set body.hypothesis_steps=8 --set body.global_steps=10"
       " --set body.pose_steps=20 --set body.offset_steps=10 --set body.preview_views=1 --set defur.resolution=64"
       " --set defur.preview_views=1 --set frames.roots=3000 --set fur.steps=60 --set fur.warm_steps=4 --set fur.batch=400"
-      " --set fur.checkpoint_interval=5 --set fur.strands=2500 --set fur.metric_strands=300 --set fur.resolution=64"
+      " --set fur.checkpoint_interval=5 --set fur.resolved_fur_px=0 --set fur.strands=2500 --set fur.metric_strands=300 --set fur.resolution=64"
       " --set fur.preview_views=1 --set fur.chamfer_queries=500 --set export.turntable_frames=2 --set export.compare_views=1";
   const auto args = [&](const fs::path& w) { return "reconstruct --scene " + scene.string() + " --out " + w.string() + settings; };
 

@@ -1,0 +1,28 @@
+#include "engine/fur/fur_resolution.hpp"
+
+#include <algorithm>
+#include <vector>
+
+namespace nf::fur {
+
+double fur_length_pixels(const FurView& view, const Roots& roots, std::size_t samples) {
+  const std::size_t stride = std::max<std::size_t>(1, roots.size() / std::max<std::size_t>(1, samples));
+  std::vector<double> lengths;
+  for (std::size_t i = 0; i < roots.size(); i += stride) {
+    const glm::dvec3 p = view.crop.project(glm::dvec3(roots.position[i]));
+    if (!(p.z > 0) || p.x < 0 || p.y < 0 || p.x >= view.crop.width || p.y >= view.crop.height) continue;
+    // crop.fx is the photo's focal scaled to the rendering grid: divide the scale back out.
+    lengths.push_back(double(roots.length[i]) * view.crop.fx / p.z / view.scale);
+  }
+  if (lengths.empty()) return 0;
+  const auto mid = lengths.begin() + std::ptrdiff_t(lengths.size() / 2);
+  std::nth_element(lengths.begin(), mid, lengths.end());
+  return *mid;
+}
+
+double image_loss_weight(double fur_pixels, double resolved_px) {
+  if (!(resolved_px > 0)) return 1;
+  return std::clamp(2 * fur_pixels / resolved_px - 1, 0.0, 1.0);
+}
+
+}  // namespace nf::fur
