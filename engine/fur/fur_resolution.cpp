@@ -6,7 +6,8 @@
 namespace nf::fur {
 
 double fur_length_pixels(const FurView& view, const Roots& roots, std::size_t samples) {
-  const std::size_t stride = std::max<std::size_t>(1, roots.size() / std::max<std::size_t>(1, samples));
+  const std::size_t n = std::max<std::size_t>(1, samples);
+  const std::size_t stride = std::max<std::size_t>(1, (roots.size() + n - 1) / n);
   std::vector<double> lengths;
   for (std::size_t i = 0; i < roots.size(); i += stride) {
     const glm::dvec3 p = view.crop.project(glm::dvec3(roots.position[i]));

@@ -11,7 +11,10 @@
 // filters' length along a strand (sigma_y 2.4 px): a shorter strand fills too little of them to set
 // their orientation. Twice their width across (3.6 px) was measured too and let the demo's 256 px
 // photos (fur 2.9 px) cost 7.7 points of F(2 cm, 20°) where 4.8 costs 1 (docs/fur-stage.md).
-// resolved_px 0: every view weighs 1.
+// resolved_px 0: every view weighs 1. Views of weight 0 are left out of the training views' draw,
+// so the others are drawn more often than with every view in it. L is counted in the photo's
+// pixels, where the Gabor maps are made; the silhouette is compared on the rendering grid
+// (`fur.resolution`), which this does not look at.
 #include <cstddef>
 
 #include "engine/fur/fur_views.hpp"

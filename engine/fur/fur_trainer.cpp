@@ -309,7 +309,8 @@ FurStepReport FurTrainer::train_step() {
   stream.submit_and_wait();
   passes["field_backward_and_adam"] = t.seconds();
 
-  // The losses of this step (unweighted), the optimiser's counters.
+  // The losses of this step (without the loss weights; the image losses with the view's image
+  // weight and reliability, as they enter the loss), the optimiser's counters.
   t.restart();
   const std::array<double, 3> geo = strand_loss_values(m.loss_scratch, m.loss_shape);
   r.direction = geo[0], r.curvature = geo[1], r.penetration = geo[2];

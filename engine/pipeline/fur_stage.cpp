@@ -205,11 +205,14 @@ json log_fur_resolution(const std::vector<fur::ViewResolution>& views, double re
     log::warn(line);
   } else if (partly + off > 0) {
     std::snprintf(line, sizeof line,
-                  "fur: %zu of %zu training views resolve the fur only partly (full weight from %.1f px): their image losses are weighted "
-                  "down (mean weight %.2f), %zu view(s) not rendered",
-                  partly + off, views.size(), resolved_px, weight, off);
+                  "fur: of %zu training views, %zu resolve the fur only partly and %zu not at all (full weight from %.1f px): their "
+                  "image losses are weighted down (mean weight %.2f over the views; those of weight 0 are not rendered)",
+                  views.size(), partly, off, resolved_px, weight);
     log::warn(line);
   }
+  std::size_t unseen = 0;
+  for (const fur::ViewResolution& v : views) unseen += v.fur_pixels == 0;
+  if (unseen) log::warn("fur: ", unseen, " training view(s) see none of the roots (a camera that misses the animal?)");
   return {{"fur_pixels_median", median}, {"image_weight_mean", weight}, {"views_without_image_losses", off}};
 }
 

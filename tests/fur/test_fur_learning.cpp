@@ -119,6 +119,25 @@ TEST_CASE("fur learning: strands lifted too far come back onto the fur, and phot
   const double f_base = fscore(baseline, truth, cm, {2.0, 20.0}), f_base_mm = fscore(baseline, truth, cm, {0.3, 30.0});
   const auto [f_warm, f_warm_mm] = scores(trainer);
 
+  // Exact resume without image steps: the steps after the warm-up render no view, a checkpoint says
+  // so, and a resumed trainer takes the same next step.
+  trainer.train(o.warm_steps + 2);
+  trainer.save_checkpoint(dir / "gated.nfwt");
+  {
+    FurTrainer resumed(ctx, in.data, *prior, {}, o);
+    REQUIRE(resumed.load_checkpoint(dir / "gated.nfwt"));
+    CHECK(resumed.step() == o.warm_steps + 2);
+    CHECK_FALSE(resumed.last_report().warm);
+    CHECK_FALSE(resumed.last_report().image);
+    const FurStepReport a = resumed.train(o.warm_steps + 3);
+    const FurStepReport b = trainer.train(o.warm_steps + 3);
+    CHECK_FALSE(a.image);
+    CHECK_FALSE(b.image);
+    CHECK(a.silhouette == 0.0);
+    CHECK(a.loss == doctest::Approx(b.loss).epsilon(1e-6));
+    CHECK(a.chamfer == doctest::Approx(b.chamfer).epsilon(1e-6));
+  }
+
   const FurStepReport last = trainer.train(o.steps);
   const double iou_after = held_out_iou(trainer, in.data);
   CHECK(trainer.step() == o.steps);
