@@ -1,7 +1,10 @@
 #include "engine/fur/fur_resolution.hpp"
 
 #include <algorithm>
+#include <utility>
 #include <vector>
+
+#include "engine/core/stats.hpp"
 
 namespace nf::fur {
 
@@ -15,10 +18,7 @@ double fur_length_pixels(const FurView& view, const Roots& roots, std::size_t sa
     // crop.fx is the photo's focal scaled to the rendering grid: divide the scale back out.
     lengths.push_back(double(roots.length[i]) * view.crop.fx / p.z / view.scale);
   }
-  if (lengths.empty()) return 0;
-  const auto mid = lengths.begin() + std::ptrdiff_t(lengths.size() / 2);
-  std::nth_element(lengths.begin(), mid, lengths.end());
-  return *mid;
+  return median(std::move(lengths));  // 0 when no root is in view
 }
 
 double image_loss_weight(double fur_pixels, double resolved_px) {

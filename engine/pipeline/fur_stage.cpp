@@ -9,6 +9,7 @@
 
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/stats.hpp"
 #include "engine/core/interrupt.hpp"
 #include "engine/core/log.hpp"
 #include "engine/core/progress.hpp"
@@ -192,8 +193,7 @@ json log_fur_resolution(const std::vector<fur::ViewResolution>& views, double re
     px.push_back(v.fur_pixels), weight += v.image_weight / double(views.size());
     partly += v.image_weight > 0 && v.image_weight < 1, off += v.image_weight == 0;
   }
-  std::sort(px.begin(), px.end());
-  const double median = px[px.size() / 2];
+  const double median = nf::median(px);
   char line[400];
   std::snprintf(line, sizeof line, "fur: the fur spans %.1f photo pixels (median over the %zu training views)", median, views.size());
   log::info(line);
