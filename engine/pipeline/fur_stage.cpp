@@ -9,10 +9,10 @@
 
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
-#include "engine/core/stats.hpp"
 #include "engine/core/interrupt.hpp"
 #include "engine/core/log.hpp"
 #include "engine/core/progress.hpp"
+#include "engine/core/stats.hpp"
 #include "engine/core/stopwatch.hpp"
 #include "engine/defur/vertex_fur.hpp"
 #include "engine/fur/baseline_groom.hpp"
@@ -188,10 +188,10 @@ json log_fur_resolution(const std::vector<fur::ViewResolution>& views, double re
   if (views.empty()) return {{"fur_pixels_median", 0.0}, {"image_weight_mean", 0.0}, {"views_without_image_losses", 0}};
   std::vector<double> px;
   double weight = 0;
-  std::size_t partly = 0, off = 0;
+  std::size_t partly = 0, off = 0, unseen = 0;
   for (const fur::ViewResolution& v : views) {
     px.push_back(v.fur_pixels), weight += v.image_weight / double(views.size());
-    partly += v.image_weight > 0 && v.image_weight < 1, off += v.image_weight == 0;
+    partly += v.image_weight > 0 && v.image_weight < 1, off += v.image_weight == 0, unseen += v.fur_pixels == 0;
   }
   const double median = nf::median(px);
   char line[400];
@@ -210,8 +210,6 @@ json log_fur_resolution(const std::vector<fur::ViewResolution>& views, double re
                   views.size(), partly, off, resolved_px, weight);
     log::warn(line);
   }
-  std::size_t unseen = 0;
-  for (const fur::ViewResolution& v : views) unseen += v.fur_pixels == 0;
   if (unseen) log::warn("fur: ", unseen, " training view(s) see none of the roots (a camera that misses the animal?)");
   return {{"fur_pixels_median", median}, {"image_weight_mean", weight}, {"views_without_image_losses", off}};
 }
