@@ -432,7 +432,7 @@ int main(int argc, char** argv) {
   bool help_markdown = false;
   auto* reconstruct = app.add_subcommand("reconstruct", "the method stage by stage (cached and resumable)");
   reconstruct->footer("stages, in order: " + nf::join(nf::pipeline::stage_names()) +
-                      "\nevery stage's settings: nf_gpu reconstruct --help-stage STAGE (README: 'Settings of each stage')");
+                      "\nevery stage's settings: nf_gpu reconstruct --help-stage STAGE (docs/settings.md)");
   auto* scene_option = reconstruct->add_option("--scene", reconstruct_scene, "scene folder or transforms.json (any format nf_gpu reads)");
   auto* out_option = reconstruct->add_option("--out", reconstruct_out, "WORK folder: one sub-folder per stage (created if needed)");
   reconstruct->add_option("--quality", reconstruct_options.quality,

@@ -593,14 +593,14 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   CHECK(stage_help.output.find("mesh_resolution") != std::string::npos);
   CHECK(stage_help.output.find("[8, 2048]") != std::string::npos);
   CHECK(run("reconstruct --help-stage nues").code == 2);
-  // The README's tables are the ones the declarations make (regenerate them with --markdown).
-  std::ifstream readme(NF_README);
-  const std::string manual(std::istreambuf_iterator<char>(readme), {});
+  // docs/settings.md's tables are the ones the declarations make (regenerate them with --markdown).
+  std::ifstream settings_doc(NF_SETTINGS_DOC);
+  const std::string settings_text(std::istreambuf_iterator<char>(settings_doc), {});
   for (const std::string stage : {"neus", "body", "knowledge", "defur", "frames", "fur", "export"}) {
     const Result table = run("reconstruct --help-stage " + stage + " --markdown");
-    CHECK_MESSAGE(manual.find("### `" + stage + "`\n\n" + table.output) != std::string::npos,
-                  "README.md's " << stage << " settings table is stale: paste `nf_gpu reconstruct --help-stage " << stage
-                                 << " --markdown`");
+    CHECK_MESSAGE(settings_text.find("### `" + stage + "`\n\n" + table.output) != std::string::npos,
+                  "docs/settings.md's " << stage << " settings table is stale: paste `nf_gpu reconstruct --help-stage " << stage
+                                        << " --markdown`");
   }
   fs::remove_all(root);
 }
