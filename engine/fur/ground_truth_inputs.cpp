@@ -12,6 +12,7 @@
 #include "engine/geometry/tangent_field.hpp"
 #include "engine/io/ground_truth.hpp"
 #include "engine/io/mesh.hpp"
+#include "engine/io/view_split.hpp"
 #include "engine/knowledge/knowledge.hpp"
 
 namespace nf::fur {
@@ -82,7 +83,7 @@ GroundTruthInputs ground_truth_inputs(gpu::Context& gpu, const fs::path& scene_d
 
   const io::Scene scene = o.make_views ? io::read_scene(scene_dir) : io::Scene{};
   for (std::uint32_t v = 0; o.make_views && v < scene.cameras.size(); ++v) {
-    const bool held = o.hold_out_every > 0 && v % std::uint32_t(o.hold_out_every) == std::uint32_t(o.hold_out_every) - 1;
+    const bool held = io::is_held_out(v, o.hold_out_every);
     (held ? data.held_out : data.train).push_back(make_fur_view(gpu, scene, v, nullptr, in.bald, o.views));
   }
   return in;

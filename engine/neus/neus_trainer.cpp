@@ -9,11 +9,13 @@
 #include "engine/core/error.hpp"
 #include "engine/core/log.hpp"
 #include "engine/core/parallel.hpp"
+#include "engine/core/random.hpp"
 #include "engine/geometry/distance_transform.hpp"
 #include "engine/geometry/point_index.hpp"
 #include "engine/gpu/context.hpp"
 #include "engine/io/image.hpp"
 #include "engine/io/mask_agreement.hpp"
+#include "engine/io/view_split.hpp"
 #include "engine/nn/weights_io.hpp"
 
 namespace nf::neus {
@@ -23,10 +25,7 @@ constexpr float kInvSMin = 1e-6f, kInvSMax = 1e6f;  // NeuS: inv_s = exp(10 v), 
 constexpr std::uint32_t kCheckpointVersion = 1;
 
 std::uint64_t mix(std::uint64_t a, std::uint64_t b) {
-  std::uint64_t z = a * 0x9E3779B97F4A7C15ull ^ (b + 0x632BE59BD9B4E019ull) * 0xD1B54A32D192ED03ull;
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
+  return mix64(a * kGoldenGamma ^ (b + 0x632BE59BD9B4E019ull) * 0xD1B54A32D192ED03ull);
 }
 float unit_float(std::uint64_t bits) { return float(bits >> 40) * (1.f / 16777216.f); }  // [0, 1)
 
@@ -181,7 +180,7 @@ NeusTrainingData load_neus_training_data(const io::Scene& scene, const VisualHul
                 "' lacks an image or a mask; the surface stage does not train on it");
       continue;
     }
-    const bool held = hold_out_every > 1 && int(c % std::size_t(hold_out_every)) == hold_out_every - 1;
+    const bool held = io::is_held_out(std::uint32_t(c), hold_out_every);
     (held ? d.held_out_views : d.train_views).push_back(std::uint32_t(c));
   }
   if (d.train_views.empty())

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "engine/core/error.hpp"
+#include "engine/core/random.hpp"
 
 namespace nf::neus {
 
@@ -45,20 +46,12 @@ std::vector<std::uint8_t> dilate_mask(const std::vector<std::uint8_t>& mask, std
 }
 
 // Counter-based random stream: splitmix64 over (seed, ray, draw).
-struct Rng {
-  std::uint64_t state;
-  std::uint64_t next() {
-    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
-  double uniform() { return double(next() >> 11) * (1.0 / 9007199254740992.0); }  // [0, 1)
+struct Rng : SplitMix64 {
   std::size_t index(std::size_t n) { return std::min(n - 1, std::size_t(uniform() * double(n))); }
 };
 
 Rng make_rng(unsigned seed, std::uint64_t ray) {
-  Rng r{std::uint64_t(seed) * 0xD1B54A32D192ED03ull ^ (ray + 1) * 0x9E3779B97F4A7C15ull};
+  Rng r{{std::uint64_t(seed) * 0xD1B54A32D192ED03ull ^ (ray + 1) * kGoldenGamma}};
   r.next();
   return r;
 }

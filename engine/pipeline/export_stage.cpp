@@ -8,6 +8,7 @@
 #include "engine/io/json_fields.hpp"
 #include "engine/io/mesh.hpp"
 #include "engine/io/npz.hpp"
+#include "engine/io/view_split.hpp"
 #include "engine/knowledge/knowledge.hpp"
 #include "engine/pipeline/body_stage.hpp"
 #include "engine/pipeline/defur_stage.hpp"
@@ -135,7 +136,7 @@ json ExportStage::run(StageContext& c, const fs::path& out_dir, const fs::path&)
   scene.scene = &c.scene;
   const int every = fur_settings().resolve(c.quality, c.settings.value("fur", json::object())).hold_out_every;
   for (std::uint32_t v = 0; v < c.scene.cameras.size(); ++v)
-    if (every > 0 && v % std::uint32_t(every) == std::uint32_t(every) - 1) scene.compare_cameras.push_back(v);
+    if (io::is_held_out(v, every)) scene.compare_cameras.push_back(v);
   if (scene.compare_cameras.empty() && !c.scene.cameras.empty()) scene.compare_cameras.push_back(0);
   OutputFolder folder(out_dir);
   json record = write_export(folder, groom, scene, o);
