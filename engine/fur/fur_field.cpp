@@ -1,6 +1,7 @@
 #include "engine/fur/fur_field.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "engine/core/error.hpp"
 #include "engine/gpu/context.hpp"
@@ -38,7 +39,7 @@ RootBox root_box(const Roots& roots) {
 }
 
 void strand_inputs(const Roots& roots, const std::vector<std::uint32_t>& ids, const RootBox& box, std::vector<float>& normalised,
-                   std::vector<float>& frames) {
+                   std::vector<float>& frames, const LengthFactors& length_factors) {
   normalised.resize(ids.size() * 3);
   frames.resize(ids.size() * kFrameFloats);
   for (std::size_t k = 0; k < ids.size(); ++k) {
@@ -52,7 +53,7 @@ void strand_inputs(const Roots& roots, const std::vector<std::uint32_t>& ids, co
       f[7 + a] = roots.bitangent[r][a];
       f[10 + a] = roots.normal[r][a];
     }
-    f[3] = roots.length[r];
+    f[3] = roots.length[r] * length_factor(length_factors, roots.region[r]);
   }
 }
 
@@ -134,7 +135,7 @@ void FurField::infer(const Roots& roots, const std::vector<std::uint32_t>& ids, 
   for (std::size_t first = 0; first < ids.size(); first += chunk) {
     const std::uint32_t n = std::uint32_t(std::min<std::size_t>(chunk, ids.size() - first));
     const std::vector<std::uint32_t> part(ids.begin() + std::ptrdiff_t(first), ids.begin() + std::ptrdiff_t(first + n));
-    strand_inputs(roots, part, box_, normalised, frames);
+    strand_inputs(roots, part, box_, normalised, frames, length_factors_);
     d_roots.upload(normalised);
     d_frames.upload(frames);
     gpu::Stream s(context_);
@@ -159,6 +160,14 @@ void FurField::set_parameters(const std::vector<float>& values) {
     throw InputError("fur field: " + std::to_string(values.size()) + " parameters given, the network has " +
                      std::to_string(mlp_->parameters().size()));
   mlp_->parameters().upload(values);
+}
+
+void FurField::set_length_factors(LengthFactors factors) {
+  for (std::size_t r = 0; r < factors.size(); ++r)
+    if (!(factors[r] > 0) || !std::isfinite(factors[r]))
+      throw InputError("fur field: the length factor of region " + std::to_string(r) + " is " + std::to_string(factors[r]) +
+                       "; it must be finite and positive");
+  length_factors_ = std::move(factors);
 }
 
 }  // namespace nf::fur

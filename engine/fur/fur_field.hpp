@@ -35,10 +35,18 @@ struct RootBox {
 };
 RootBox root_box(const Roots& roots);
 
-// Frames rows (kFrameFloats per strand: root, length, T, B, N) and normalised roots of the roots
-// listed in `ids`.
+// Per region (indexed by Roots::region), a factor on the roots' fur lengths: 1 keeps the
+// knowledge's length, the fur stage learns it from the photos (fur_trainer.hpp). Regions past the
+// end keep 1.
+using LengthFactors = std::vector<float>;
+inline float length_factor(const LengthFactors& f, std::int32_t region) {
+  return region >= 0 && std::size_t(region) < f.size() ? f[std::size_t(region)] : 1.f;
+}
+
+// Frames rows (kFrameFloats per strand: root, length x its region's factor, T, B, N) and normalised
+// roots of the roots listed in `ids`.
 void strand_inputs(const Roots& roots, const std::vector<std::uint32_t>& ids, const RootBox& box, std::vector<float>& normalised,
-                   std::vector<float>& frames);
+                   std::vector<float>& frames, const LengthFactors& length_factors = {});
 
 class FurField {
  public:
@@ -79,6 +87,10 @@ class FurField {
   std::vector<float> parameters() const;
   void set_parameters(const std::vector<float>& values);  // InputError on a size mismatch
 
+  // The per-region length factors every strand of the field is grown with (empty: all 1).
+  const LengthFactors& length_factors() const { return length_factors_; }
+  void set_length_factors(LengthFactors factors);  // InputError unless finite and positive
+
  private:
   FurHeadShape head_shape(std::uint32_t strands) const;
   StrandGeometryShape geometry_shape(std::uint32_t strands) const;
@@ -89,6 +101,7 @@ class FurField {
   RootBox box_;
   nn::FrequencyEncoding encoding_;
   std::unique_ptr<nn::Mlp> mlp_;
+  LengthFactors length_factors_;
 };
 
 }  // namespace nf::fur

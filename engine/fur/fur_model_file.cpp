@@ -19,6 +19,10 @@ void save_fur_model(const std::filesystem::path& path, const FurField& field, co
                   {"train_decoder", with_decoder}};
   std::vector<float> params = field.parameters();
   model.tensors.push_back({"field", {params.size()}, std::move(params)});
+  if (!field.length_factors().empty()) {
+    std::vector<float> factors = field.length_factors();
+    model.tensors.push_back({"length_factors", {factors.size()}, std::move(factors)});
+  }
   if (with_decoder) {
     std::vector<float> dec = prior.decoder().parameters().download();
     model.tensors.push_back({"decoder", {dec.size()}, std::move(dec)});
@@ -69,6 +73,8 @@ FurModel load_fur_model(gpu::Context& context, const std::filesystem::path& path
   m.field = std::make_unique<FurField>(context, config, *m.prior, box, 1);
   try {
     m.field->set_parameters(file.tensor("field", path).values);
+    for (const nn::NamedTensor& t : file.tensors)  // absent in models of earlier versions: all 1
+      if (t.name == "length_factors") m.field->set_length_factors(t.values);
   } catch (const InputError& e) {
     throw InputError(where + ": " + e.what());
   }

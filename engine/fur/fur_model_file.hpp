@@ -1,6 +1,7 @@
 #pragma once
 // The fur stage's trained model on disk (fur/model.nfwt): the fur field's MLP parameters, its
-// configuration and root box, and the strand prior's decoder when it was fine-tuned. Loading it
+// configuration and root box, its per-region length factors, and the strand prior's decoder when
+// it was fine-tuned. Loading it
 // rebuilds a field that infers the same strands as the one that was saved, which is what lets
 // `nf_gpu edit` re-infer a groom without retraining.
 #include <cstdint>

@@ -7,6 +7,7 @@
 
 #include "engine/core/error.hpp"
 #include "engine/core/log.hpp"
+#include "engine/core/random.hpp"
 #include "engine/core/stopwatch.hpp"
 #include "engine/fur/fur_resolution.hpp"
 #include "engine/fur/prior_training.hpp"
@@ -21,15 +22,8 @@
 namespace nf::fur {
 namespace {
 
-constexpr int kCheckpointVersion = 1;
+constexpr int kCheckpointVersion = 2;  // 2: the warm-up's field and the length factors
 constexpr std::uint32_t kHistoryEvery = 10;
-
-std::uint64_t mix(std::uint64_t z) {
-  z += 0x9E3779B97F4A7C15ull;
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
 
 // The near and far planes of a view: around the body's depth range, wide enough for the fur.
 std::pair<double, double> depth_range(const FurView& v, double reach) {
@@ -55,6 +49,8 @@ void FurTrainingOptions::validate() const {
   if (!(coverage > 0)) fail("coverage must be positive");
   if (!(resolved_fur_px >= 0 && std::isfinite(resolved_fur_px))) fail("resolved_fur_px must be finite and non-negative");
   if (!(lying_angle_deg >= 0 && lying_angle_deg <= 90)) fail("lying_angle_deg must be in [0, 90]");
+  if (!(length_lr >= 0 && std::isfinite(length_lr))) fail("length_lr must be finite and non-negative");
+  length_bounds.validate();
   for (double w : {weights.silhouette, weights.orientation, weights.direction, weights.chamfer, weights.penetration, weights.curvature})
     if (!(w >= 0 && std::isfinite(w))) fail("loss weights must be finite and non-negative");
 }
@@ -75,6 +71,8 @@ json to_json(const FurTrainingOptions& o) {
           {"strand_width", o.strand_width},
           {"coverage", o.coverage},
           {"train_decoder", o.train_decoder},
+          {"length_lr", o.length_lr},
+          {"length_bounds", {o.length_bounds.lo, o.length_bounds.hi}},
           {"seed", o.seed}};
 }
 
@@ -89,6 +87,7 @@ json to_json(const FurStepReport& r) {
          {"penetration", r.penetration},
          {"curvature", r.curvature},
          {"chamfer_unmatched", r.chamfer_unmatched},
+         {"length_factor_mean", r.length_factor_mean},
          {"lr", r.lr},
          {"grad_norm", r.grad_norm},
          {"skipped_steps", r.skipped_steps},
@@ -197,6 +196,11 @@ FurTrainer::FurTrainer(gpu::Context& context, const FurTrainingData& data, Stran
     field_->start_at(z, 0.5413f, 0.1f);  // softplus(0.5413) = 1: every segment starts fully confident
   }
   impl_ = std::make_unique<Impl>(context, data, *field_, options_);
+  std::int32_t regions = 0;
+  for (std::int32_t r : data.roots.region) regions = std::max(regions, r + 1);
+  length_raw_.assign(std::size_t(regions), length_factor_raw(1.0, options_.length_bounds));
+  length_m_.assign(length_raw_.size(), 0.0), length_v_.assign(length_raw_.size(), 0.0);
+  apply_length_factors();
   nn::AdamConfig adam;
   const std::uint64_t count = field_->mlp().parameters().size();
   impl_->adam = std::make_unique<nn::Adam>(context, count, adam, std::vector<nn::ParamGroup>{{0, count, 1.f, options.weight_decay}});
@@ -220,13 +224,13 @@ FurStepReport FurTrainer::train_step() {
   const Stopwatch t_step;
   FurStepReport r;
   r.warm = step_ < options_.warm_steps || data_.train.empty();
-  const std::uint64_t seed = mix(mix(options_.seed) ^ step_);
+  const std::uint64_t seed = splitmix64(splitmix64(options_.seed) ^ step_);
   const std::vector<std::uint32_t> ids = sample_indices(data_.roots.size(), m.batch.strands, seed);
   std::vector<float> normalised, frames, guides(ids.size() * 3), lengths(ids.size());
-  strand_inputs(data_.roots, ids, field_->box(), normalised, frames);
+  strand_inputs(data_.roots, ids, field_->box(), normalised, frames, field_->length_factors());
   for (std::size_t k = 0; k < ids.size(); ++k) {
     for (int a = 0; a < 3; ++a) guides[3 * k + std::size_t(a)] = data_.roots.direction[ids[k]][a];
-    lengths[k] = data_.roots.length[ids[k]];
+    lengths[k] = frames[k * kFrameFloats + 3];  // the knowledge's length x the region's factor
   }
   m.batch.roots.upload(normalised);
   m.batch.frames.upload(frames);
@@ -308,6 +312,8 @@ FurStepReport FurTrainer::train_step() {
   if (m.adam_decoder) m.adam_decoder->step(stream, field_->prior().decoder().parameters(), field_->prior().decoder().gradients(), r.lr);
   stream.submit_and_wait();
   passes["field_backward_and_adam"] = t.seconds();
+  // The lengths learn from the losses that see them: the image losses and the chamfer to M_NeuS.
+  if (!r.warm && options_.length_lr > 0 && !length_raw_.empty()) learn_lengths(ids, float(options_.length_lr * r.lr / options_.lr));
 
   // The losses of this step (without the loss weights; the image losses with the view's image
   // weight and reliability, as they enter the loss), the optimiser's counters.
@@ -326,6 +332,11 @@ FurStepReport FurTrainer::train_step() {
   r.loss = fw.direction * r.direction + fw.penetration * r.penetration / radius +
            (r.warm ? 0.0 : fw.curvature * r.curvature + fw.silhouette * r.silhouette + fw.orientation * r.orientation +
                                fw.chamfer * r.chamfer / (radius * radius));
+  {
+    double log_sum = 0;
+    for (std::uint32_t id : ids) log_sum += std::log(double(length_factor(field_->length_factors(), data_.roots.region[id])));
+    r.length_factor_mean = std::exp(log_sum / double(std::max<std::size_t>(1, ids.size())));
+  }
   const nn::Adam::Counters counters = m.adam->counters();
   r.grad_norm = counters.last_norm;
   r.skipped_steps = counters.skipped;
@@ -338,13 +349,48 @@ FurStepReport FurTrainer::train_step() {
   return r;
 }
 
+void FurTrainer::learn_lengths(const std::vector<std::uint32_t>& ids, float lr) {
+  const std::vector<float> grad_frames = impl_->batch.grad_frames.download(0, std::uint64_t(ids.size()) * kFrameFloats);
+  std::vector<std::int32_t> region(ids.size());
+  std::vector<float> base(ids.size());
+  for (std::size_t k = 0; k < ids.size(); ++k) region[k] = data_.roots.region[ids[k]], base[k] = data_.roots.length[ids[k]];
+  const std::vector<double> g = length_factor_gradients<float>(region, base, grad_frames, length_raw_.size());
+  // Adam on the raw factors (a handful of numbers: on the host). Each moves about lr a step.
+  constexpr double b1 = 0.9, b2 = 0.999, eps = 1e-12;
+  ++length_steps_;
+  const double c1 = 1 - std::pow(b1, length_steps_), c2 = 1 - std::pow(b2, length_steps_);
+  for (std::size_t r = 0; r < length_raw_.size(); ++r) {
+    const double gr = g[r] * length_factor_derivative(length_raw_[r], options_.length_bounds);
+    if (!std::isfinite(gr)) continue;  // a non-finite step is skipped, as the field's Adam does
+    length_m_[r] = b1 * length_m_[r] + (1 - b1) * gr;
+    length_v_[r] = b2 * length_v_[r] + (1 - b2) * gr * gr;
+    length_raw_[r] -= lr * (length_m_[r] / c1) / (std::sqrt(length_v_[r] / c2) + eps);
+  }
+  apply_length_factors();
+}
+
+void FurTrainer::apply_length_factors() {
+  LengthFactors f(length_raw_.size());
+  for (std::size_t r = 0; r < f.size(); ++r) f[r] = float(length_factor_of(length_raw_[r], options_.length_bounds));
+  field_->set_length_factors(std::move(f));
+}
+
+FurFieldState FurTrainer::state() const { return {field_->parameters(), field_->length_factors(), step_}; }
+
+void FurTrainer::set_state(const FurFieldState& state) {
+  field_->set_parameters(state.parameters);
+  field_->set_length_factors(state.length_factors);
+}
+
 FurStepReport FurTrainer::train(std::uint32_t until, const std::filesystem::path& checkpoint,
                                 const std::function<bool(const FurStepReport&)>& after_step) {
   until = std::min(until, options_.steps);
   FurStepReport report = last_;
+  if (!warm_ && step_ == options_.warm_steps) warm_ = state();
   while (step_ < until) {
     report = train_step();
     last_ = report;
+    if (step_ == options_.warm_steps) warm_ = state();
     if (step_ % kHistoryEvery == 0 || step_ == until || step_ == options_.warm_steps) history_.push_back(report);
     if (!checkpoint.empty() && options_.checkpoint_interval > 0 && (step_ % options_.checkpoint_interval == 0 || step_ == until))
       save_checkpoint(checkpoint);
@@ -357,14 +403,14 @@ std::vector<float> FurTrainer::render(const FurView& view, std::uint32_t strands
   const std::vector<std::uint32_t> ids = sample_indices(data_.roots.size(), strands, seed);
   FurField::Batch batch(*field_, std::uint32_t(ids.size()));
   std::vector<float> normalised, frames;
-  strand_inputs(data_.roots, ids, field_->box(), normalised, frames);
+  strand_inputs(data_.roots, ids, field_->box(), normalised, frames, field_->length_factors());
   batch.roots.upload(normalised);
   batch.frames.upload(frames);
   gpu::Stream stream(context_);
   field_->forward(stream, batch);
   stream.submit_and_wait();
   float longest = 0;
-  for (std::uint32_t id : ids) longest = std::max(longest, data_.roots.length[id]);
+  for (std::size_t k = 0; k < ids.size(); ++k) longest = std::max(longest, frames[k * kFrameFloats + 3]);
   return rasterize(view, batch.points, batch.confidence, std::uint32_t(ids.size()), longest);
 }
 
@@ -429,6 +475,14 @@ void FurTrainer::save_checkpoint(const std::filesystem::path& path) const {
   std::vector<float> p = field_->parameters();
   file.tensors.push_back({"field", {p.size()}, std::move(p)});
   nn::add_state_tensors(impl_->adam->save_state(), "adam.field", file);
+  file.config["length_steps"] = length_steps_;
+  for (auto [name, values] : {std::pair{"length.raw", &length_raw_}, {"length.m", &length_m_}, {"length.v", &length_v_}})
+    file.tensors.push_back({name, {values->size()}, std::vector<float>(values->begin(), values->end())});
+  if (warm_) {
+    file.config["warm_step"] = warm_->step;
+    file.tensors.push_back({"warm.field", {warm_->parameters.size()}, warm_->parameters});
+    file.tensors.push_back({"warm.length_factors", {warm_->length_factors.size()}, warm_->length_factors});
+  }
   if (impl_->adam_decoder) {
     std::vector<float> d = field_->prior().decoder().parameters().download();
     file.tensors.push_back({"decoder", {d.size()}, std::move(d)});
@@ -449,6 +503,7 @@ FurStepReport report_from_json(const json& j) {
                              {"curvature", &r.curvature}, {"seconds", &r.seconds}})
     *field = j.at(name).get<double>();
   r.chamfer_unmatched = j.at("chamfer_unmatched").get<std::uint64_t>();
+  r.length_factor_mean = j.value("length_factor_mean", 1.0);
   r.lr = j.at("lr").get<float>();
   r.grad_norm = j.at("grad_norm").get<float>();
   r.skipped_steps = j.at("skipped_steps").get<std::uint32_t>();
@@ -462,12 +517,18 @@ FurCheckpointState parse_fur_checkpoint(const nn::WeightsFile& file, const std::
   s.field = file.tensor("field", path).values;
   s.field_adam = nn::state_from_tensors(file, "adam.field", path);
   if (with_decoder) s.decoder = file.tensor("decoder", path).values, s.decoder_adam = nn::state_from_tensors(file, "adam.decoder", path);
+  s.length_raw = file.tensor("length.raw", path).values;
+  s.length_m = file.tensor("length.m", path).values;
+  s.length_v = file.tensor("length.v", path).values;
   try {
     const json& c = file.config;
     s.step = c.at("step").get<std::uint32_t>();
     s.seconds = c.at("seconds").get<double>();
     s.last = report_from_json(c.at("last"));
     for (const json& r : c.at("history")) s.history.push_back(report_from_json(r));
+    s.length_steps = c.at("length_steps").get<std::uint32_t>();
+    if (c.contains("warm_step"))
+      s.warm = FurFieldState{file.tensor("warm.field", path).values, file.tensor("warm.length_factors", path).values, c.at("warm_step").get<std::uint32_t>()};
   } catch (const json::exception& e) {
     throw InputError(path.string() + ": " + e.what());
   }
@@ -493,6 +554,18 @@ bool FurTrainer::load_checkpoint(const std::filesystem::path& path) {
     field_->prior().decoder().parameters().upload(s.decoder);
     impl_->adam_decoder->load_state(s.decoder_adam);
   }
+  if (s.length_raw.size() != length_raw_.size() || s.length_m.size() != length_raw_.size() || s.length_v.size() != length_raw_.size())
+    throw InputError(path.string() + ": the length factors are for " + std::to_string(s.length_raw.size()) + " regions, the roots have " +
+                     std::to_string(length_raw_.size()));
+  if (s.warm && s.warm->parameters.size() != field_->mlp().parameters().size())
+    throw InputError(path.string() + ": the warm-up's field has " + std::to_string(s.warm->parameters.size()) + " parameters, this network " +
+                     std::to_string(field_->mlp().parameters().size()));
+  length_raw_.assign(s.length_raw.begin(), s.length_raw.end());
+  length_m_.assign(s.length_m.begin(), s.length_m.end());
+  length_v_.assign(s.length_v.begin(), s.length_v.end());
+  length_steps_ = s.length_steps;
+  apply_length_factors();
+  warm_ = std::move(s.warm);
   step_ = s.step, seconds_ = s.seconds, last_ = s.last, history_ = std::move(s.history);
   return true;
 }

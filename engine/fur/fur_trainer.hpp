@@ -21,12 +21,14 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "engine/core/json.hpp"
 #include "engine/defur/sdf_file.hpp"
 #include "engine/fur/fur_field.hpp"
 #include "engine/fur/fur_views.hpp"
+#include "engine/fur/length_factors.hpp"
 #include "engine/fur/roots.hpp"
 #include "engine/nn/adam.hpp"
 #include "engine/nn/weights_io.hpp"
@@ -73,6 +75,11 @@ struct FurTrainingOptions {
   double strand_width = 0;
   double coverage = 1.5;
   bool train_decoder = false;
+  // Lengths from the photos (length_factors.hpp): after the warm-up, each region's factor on the
+  // knowledge's lengths is optimised with the field by Adam at this learning rate (following the
+  // field's cosine decay; 0: the knowledge's lengths stay), within the bounds.
+  float length_lr = 0.01f;
+  LengthFactorBounds length_bounds;
   std::uint32_t checkpoint_interval = 100;  // 0: none; about 3 minutes of `default` steps on 2 cores
   unsigned seed = 1;
   void validate() const;  // InputError naming the field
@@ -97,6 +104,7 @@ struct FurStepReport {
   bool image = false;      // the image losses ran (after the warm-up, on a view that resolves the fur)
   double loss = 0, silhouette = 0, orientation = 0, direction = 0, chamfer = 0, penetration = 0, curvature = 0;
   std::uint64_t chamfer_unmatched = 0;
+  double length_factor_mean = 1;  // the length factors' geometric mean over the roots
   float lr = 0, grad_norm = 0;
   std::uint32_t skipped_steps = 0;
   double seconds = 0;  // training time so far
@@ -118,11 +126,21 @@ struct ViewScore {
   std::uint64_t pixels = 0;
 };
 
+// What the groom is made of: the field's parameters and length factors (a snapshot to return to).
+struct FurFieldState {
+  std::vector<float> parameters;
+  LengthFactors length_factors;
+  std::uint32_t step = 0;
+};
+
 // What a fur checkpoint holds besides its configuration, read and checked for form (tensors
 // present, fields of the right types) before anything is applied; InputError naming the file.
 struct FurCheckpointState {
   std::vector<float> field, decoder;
   nn::Adam::State field_adam, decoder_adam;
+  std::vector<float> length_raw, length_m, length_v;  // the length factors' parameters and Adam moments
+  std::uint32_t length_steps = 0;
+  std::optional<FurFieldState> warm;  // the field at the end of the warm-up, once reached
   std::uint32_t step = 0;
   double seconds = 0;
   FurStepReport last;
@@ -143,6 +161,13 @@ class FurTrainer {
   double strand_width(std::uint32_t strands) const;  // scene units, for a rendering of `strands` strands
   std::uint32_t batch() const;                       // strands per step
   const std::vector<ViewResolution>& view_resolution() const { return resolution_; }  // per training view
+  bool any_view_resolves_fur() const { return !image_views_.empty(); }
+
+  // The groom now, and as it was when the warm-up ended (the image steps' starting point; null
+  // before then). set_state returns the field to a state (the stage's selection).
+  FurFieldState state() const;
+  const FurFieldState* warm_state() const { return warm_ ? &*warm_ : nullptr; }
+  void set_state(const FurFieldState& state);
 
   // Trains until `until` steps are done (capped at options.steps); `after_step` may stop it by
   // returning false. Checkpoints go to `checkpoint` (when not empty) every checkpoint_interval
@@ -164,6 +189,7 @@ class FurTrainer {
  private:
   struct Impl;
   FurStepReport train_step();
+  void learn_lengths(const std::vector<std::uint32_t>& ids, float lr);
   // The rasteriser's 5 planes of `strands` strands in `view`; `reach`: how far a strand reaches
   // from its root (the depth range's margin).
   std::vector<float> rasterize(const FurView& view, gpu::BufferRange points, gpu::BufferRange confidence, std::uint32_t strands,
@@ -181,6 +207,11 @@ class FurTrainer {
   double seconds_ = 0;
   FurStepReport last_;
   std::vector<FurStepReport> history_;
+  std::optional<FurFieldState> warm_;
+  // Lengths from the photos: one raw factor per region (regions of the roots), Adam's moments.
+  std::vector<double> length_raw_, length_m_, length_v_;
+  std::uint32_t length_steps_ = 0;
+  void apply_length_factors();
 };
 
 // A rendering (FurTrainer::render) against the view's targets.

@@ -1,6 +1,7 @@
 #include "engine/gradcheck/catalog.hpp"
 
 #include "engine/fur/fur_field_head_gradcheck.hpp"
+#include "engine/fur/length_factors_gradcheck.hpp"
 #include "engine/fur/strand_geometry_gradcheck.hpp"
 #include "engine/fur/strand_chamfer_gradcheck.hpp"
 #include "engine/fur/strand_losses_gradcheck.hpp"
@@ -28,6 +29,7 @@ std::vector<std::unique_ptr<DifferentiableKernel>> all_kernels() {
   kernels.push_back(fur::make_strand_losses_check());
   kernels.push_back(fur::make_strand_chamfer_check());
   kernels.push_back(fur::make_fur_head_check());
+  kernels.push_back(fur::make_length_factors_check());
   return kernels;
 }
 

@@ -49,6 +49,12 @@ json run_edit(gpu::Context& context, const EditOptions& o) {
   // unedited roots come out bit-identical.
   Stopwatch t;
   fur::FurModel model = fur::load_fur_model(context, fur_outputs(o.work).model());
+  {  // A length the user sets is the strands' length: the factor learned from the photos is dropped there.
+    fur::LengthFactors factors = model.field->length_factors();
+    for (std::size_t r = 0; r < factors.size() && r < edits.regions.size(); ++r)
+      if (edits.regions[r].length_cm) factors[r] = 1.f;
+    model.field->set_length_factors(std::move(factors));
+  }
   const auto n = std::uint32_t(roots.size());
   std::vector<std::uint32_t> ids(n);
   for (std::uint32_t i = 0; i < n; ++i) ids[i] = i;
