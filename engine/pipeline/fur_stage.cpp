@@ -3,9 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <optional>
-#include <sstream>
 
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
@@ -14,22 +12,27 @@
 #include "engine/core/progress.hpp"
 #include "engine/core/stats.hpp"
 #include "engine/core/stopwatch.hpp"
+#include "engine/body/regions.hpp"
 #include "engine/defur/vertex_fur.hpp"
 #include "engine/fur/baseline_groom.hpp"
 #include "engine/fur/fur_model_file.hpp"
 #include "engine/fur/ground_truth_inputs.hpp"
 #include "engine/gpu/context.hpp"
 #include "engine/io/ground_truth.hpp"
+#include "engine/io/image.hpp"
 #include "engine/io/json_fields.hpp"
 #include "engine/io/mesh.hpp"
 #include "engine/io/npz.hpp"
 #include "engine/io/strand_files.hpp"
 #include "engine/io/view_names.hpp"
+#include "engine/io/view_split.hpp"
 #include "engine/knowledge/knowledge.hpp"
 #include "engine/metrics/groom_scores.hpp"
 #include "engine/pipeline/body_stage.hpp"
 #include "engine/pipeline/checkpoint.hpp"
 #include "engine/pipeline/defur_stage.hpp"
+#include "engine/pipeline/fur_evaluation.hpp"
+#include "engine/pipeline/fur_selection.hpp"
 #include "engine/pipeline/frames_stage.hpp"
 #include "engine/pipeline/knowledge_stage.hpp"
 #include "engine/pipeline/preview_views.hpp"
@@ -38,26 +41,9 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 2;  // 2: fur/roots.npz when the groom has roots of its own
+constexpr int kStageVersion = 3;  // 2: fur/roots.npz when the groom has roots of its own; 3: selection, length factors
 
 FurSettings settings_of(const StageContext& c) { return fur_settings().resolve(c.quality, c.settings.value("fur", json::object())); }
-
-// Training and held-out cameras (every k-th held out, as the NeuS stage does) that have a photo and
-// a mask.
-void split_views(const io::Scene& scene, int hold_out_every, std::vector<std::uint32_t>& train, std::vector<std::uint32_t>& held_out) {
-  for (std::uint32_t v = 0; v < scene.cameras.size(); ++v) {
-    const io::Camera& cam = scene.cameras[v];
-    if (cam.image.empty() || cam.mask.empty()) {
-      log::warn("fur: camera '", cam.name, "' has no ", cam.image.empty() ? "photo" : "mask", "; it is not used");
-      continue;
-    }
-    if (hold_out_every > 0 && v % std::uint32_t(hold_out_every) == std::uint32_t(hold_out_every) - 1)
-      held_out.push_back(v);
-    else
-      train.push_back(v);
-  }
-  if (train.empty() && !held_out.empty()) train.swap(held_out);  // a single view trains
-}
 
 }  // namespace
 
@@ -111,75 +97,6 @@ io::Image preview_image(const fur::FurView& v, const std::vector<float>& image) 
       for (int ch = 0; ch < 3; ++ch) right[ch] = conf * g[ch] * (v.mask[p] > 0.5f ? 1.f : 0.f);
     }
   return out;
-}
-
-json step_json(const fur::FurStepReport& r) { return fur::to_json(r); }
-
-struct HeldOutScores {
-  json views = json::array();
-  double silhouette_iou = 0, orientation_error_deg = 0;  // means over the views
-};
-
-// A groom's strands rendered into each held-out view and scored against its targets; `images`
-// (when given) keeps the renderings for the previews; `before_each` may stop the work.
-HeldOutScores score_held_out(const std::vector<fur::FurView>& views, const io::Scene& scene,
-                             const std::function<std::vector<float>(const fur::FurView&)>& render, std::vector<std::vector<float>>* images,
-                             const std::function<void()>& before_each = {}) {
-  HeldOutScores h;
-  for (const fur::FurView& v : views) {
-    if (before_each) before_each();
-    std::vector<float> image = render(v);
-    const fur::ViewScore score = fur::score_view(v, image);
-    h.views.push_back({{"camera", scene.cameras[v.camera].name}, {"silhouette_iou", score.silhouette_iou},
-                       {"orientation_error_deg", score.orientation_error_deg}, {"pixels", score.pixels}});
-    h.silhouette_iou += score.silhouette_iou / double(views.size());
-    h.orientation_error_deg += score.orientation_error_deg / double(views.size());
-    if (images) images->push_back(std::move(image));
-  }
-  return h;
-}
-
-// The field's strands at `strands` seeded roots.
-HeldOutScores score_field_held_out(fur::FurTrainer& trainer, const std::vector<fur::FurView>& views, const io::Scene& scene,
-                                   std::uint32_t strands, unsigned seed, std::vector<std::vector<float>>* images,
-                                   const std::function<void()>& before_each = {}) {
-  return score_held_out(views, scene, [&](const fur::FurView& v) { return trainer.render(v, strands, seed); }, images, before_each);
-}
-
-// Given strands (strands x 100 x 3) rendered like the field's: the baseline groom, and on synth
-// scenes the true groom: what the truth itself scores against the photos' Gabor maps, the scale
-// on which the groom's held-out orientation error can be read.
-HeldOutScores score_strands_held_out(fur::FurTrainer& trainer, const std::vector<fur::FurView>& views, const io::Scene& scene,
-                                     const std::vector<float>& points, const std::function<void()>& before_each) {
-  return score_held_out(views, scene, [&](const fur::FurView& v) { return trainer.render_strands(v, points); }, nullptr, before_each);
-}
-
-json held_out_json(const HeldOutScores& h) { return {{"silhouette_iou", h.silhouette_iou}, {"orientation_error_deg", h.orientation_error_deg}}; }
-
-// One point of curve.jsonl: training time, the held-out views' scores and, with a ground truth,
-// the groom's F-scores and tips against the truth (metric_strands strands of the field, inferred
-// at a fixed subset of the roots so that the points differ only by the training).
-json curve_point(fur::FurTrainer& trainer, const fur::FurTrainingData& data, const FurSettings& s, const io::Scene& scene,
-                 const metrics::GroomTruth& truth, double cm, std::uint32_t score_strands) {
-  const Stopwatch t;
-  const HeldOutScores held = score_field_held_out(trainer, data.held_out, scene, score_strands, s.training.seed + 7, nullptr);
-  json p{{"step", trainer.step()}, {"seconds", trainer.step() ? trainer.last_report().seconds : 0.0}, {"held_out", held_out_json(held)}};
-  if (trainer.step()) p["loss"] = trainer.last_report().loss;
-  if (truth.strands || truth.outer) {
-    std::vector<std::uint32_t> ids = fur::sample_indices(data.roots.size(), s.metric_strands, s.training.seed + 13);
-    std::sort(ids.begin(), ids.end());
-    std::vector<float> xyz;
-    xyz.reserve(ids.size() * fur::kStrandPoints * 3);
-    trainer.field().infer(data.roots, ids, 65536, [&](std::size_t, std::uint32_t, const std::vector<float>& points, const std::vector<float>&) {
-      xyz.insert(xyz.end(), points.begin(), points.end());
-    });
-    const io::StrandSet groom = io::StrandSet::uniform(std::uint32_t(ids.size()), fur::kStrandPoints, std::move(xyz));
-    const json scores = metrics::groom_scores(metrics::sample_strands(groom, s.metric_strands, s.metric_points, 1), truth, cm);
-    for (const char* key : {"fscore", "tips_to_outer"})
-      if (scores.contains(key)) p[key] = scores[key];
-  }
-  p["scoring_seconds"] = t.seconds();
-  return p;
 }
 
 // Says in the log how many photo pixels the fur spans and what that does to the image losses
@@ -258,63 +175,65 @@ json FurStage::parameters(const StageContext& c) const {
   return {{"stage_version", kStageVersion}, {"settings", fur_settings().values(c.quality, c.settings.value("fur", json::object()))}};
 }
 
-json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& resume) {
-  const FurSettings s = settings_of(c);
-  const FurOutputs out{out_dir};
-  const DefurOutputs d = defur_outputs(c.work);
-  const FramesOutputs f = frames_outputs(c.work);
-  const Stopwatch t_all;
-  json seconds = json::object();
-  Stopwatch t;
+namespace {
 
-  geometry::Mesh bald = io::read_mesh(d.bald());
-  defur::VertexFur vertex_fur = defur::read_vertex_fur(d.vertex_fur(), bald.vertex_count());
-  double cm = read_metric_scale(knowledge_outputs(c.work));
-  const knowledge::Knowledge knowledge = knowledge::read_knowledge(knowledge_outputs(c.work).knowledge());
+// What the stage reads, once: the earlier stages' results (or the truth swapped in for them).
+struct FurInputs {
+  geometry::Mesh bald;
+  std::optional<geometry::Mesh> envelope;  // M_NeuS (or the true envelope with truth=all)
+  defur::VertexFur vertex_fur;
+  double cm = 1;
   fur::FurTrainingData data;
-  data.roots = fur::read_roots(f.roots());
-  // `truth`: the earlier stages' results swapped for the scene's ground truth, through the code
-  // those stages run, at the same number of roots.
   std::optional<fur::GroundTruthInputs> swapped;
-  if (s.truth != "none") {
-    fur::GroundTruthInputOptions gi;
-    gi.roots = std::max<std::uint64_t>(1, data.roots.size()), gi.hold_out_every = s.hold_out_every, gi.seed = s.training.seed;
-    gi.bald = s.truth == "knowledge" ? &bald : nullptr;
-    gi.make_views = false;
-    swapped = fur::ground_truth_inputs(c.gpu, c.scene_dir, gi);
-    cm = swapped->data.cm_per_unit;
-    vertex_fur = swapped->vertex_fur;
-    if (s.truth == "all") {
-      bald = swapped->bald;
-      data = std::move(swapped->data);
-    } else {
-      data.roots = std::move(swapped->data.roots);
-    }
-    log::info("fur: truth=", s.truth, ": the ", s.truth == "all" ? "true bald body, knowledge and roots" : "true knowledge on the pipeline's M_bald",
-              " (", data.roots.size(), " roots, ", cm, " cm per unit)");
-  }
-  data.cm_per_unit = cm;
-  write_file_atomic(out.scale(), json{{"cm_per_unit", cm}, {"source", swapped ? "gt/scene.json" : "knowledge/scale.json"}}.dump(2) + "\n");
+};
 
-  if (data.roots.size() == 0) {
-    log::warn("fur: every region of the knowledge is bald, so there is no fur to grow; writing an empty groom");
-    io::write_uniform_hair(out.strands(), 0, fur::kStrandPoints, [](const auto&) {});
-    io::write_npz(out.regions(), {{"region", {0}, "<i4", {}}});
-    json summary{{"strands", 0}, {"roots_file", "frames/roots.npz"}, {"note", "every region is bald: no strands"}};
-    write_file_atomic(out.metrics(), summary.dump(2) + "\n");
-    return summary;
-  }
-
+FurInputs read_inputs(StageContext& c, const FurSettings& s) {
+  const DefurOutputs d = defur_outputs(c.work);
+  FurInputs in;
+  in.bald = io::read_mesh(d.bald());
+  in.vertex_fur = defur::read_vertex_fur(d.vertex_fur(), in.bald.vertex_count());
+  in.cm = read_metric_scale(knowledge_outputs(c.work));
+  in.data.roots = fur::read_roots(frames_outputs(c.work).roots());
+  in.swapped = swap_in_truth(c.gpu, c.scene_dir, s, in.bald, in.vertex_fur, in.data, in.cm);
+  in.data.cm_per_unit = in.cm;
+  if (in.data.roots.size() == 0) return in;
   if (s.truth != "all") {
-    const geometry::Mesh outer = io::read_mesh(body_outputs(c.work).outer_regions());
-    data.bald_sdf = defur::read_sdf_file(d.bald_sdf());
-    fur::set_surface_inputs(data, outer, [&](std::int32_t r) { return knowledge.grows_fur(body::Region(r)); }, s.training.seed);
+    const knowledge::Knowledge knowledge = knowledge::read_knowledge(knowledge_outputs(c.work).knowledge());
+    in.envelope = io::read_mesh(body_outputs(c.work).outer_regions());
+    in.data.bald_sdf = defur::read_sdf_file(d.bald_sdf());
+    fur::set_surface_inputs(in.data, *in.envelope, [&](std::int32_t r) { return knowledge.grows_fur(body::Region(r)); }, s.training.seed);
+  } else {
+    in.envelope = in.swapped->outer;
   }
-  data.fur_area = fur::fur_area(bald, vertex_fur);
-  seconds["read"] = t.seconds();
+  in.data.fur_area = fur::fur_area(in.bald, in.vertex_fur);
+  return in;
+}
 
-  // The views: targets at the stage's resolution, cropped to the masks.
-  t.restart();
+json write_bald_groom(const FurOutputs& out) {
+  log::warn("fur: every region of the knowledge is bald, so there is no fur to grow; writing an empty groom");
+  io::write_uniform_hair(out.strands(), 0, fur::kStrandPoints, [](const auto&) {});
+  io::write_npz(out.regions(), {{"region", {0}, "<i4", {}}});
+  json summary{{"strands", 0}, {"roots_file", "frames/roots.npz"}, {"note", "every region is bald: no strands"}};
+  write_file_atomic(out.metrics(), summary.dump(2) + "\n");
+  return summary;
+}
+
+// Training and held-out cameras that have a photo and a mask, split by io::is_held_out; a scene
+// whose every usable camera would be held out trains on them instead.
+void split_views(const io::Scene& scene, int hold_out_every, std::vector<std::uint32_t>& train, std::vector<std::uint32_t>& held_out) {
+  for (std::uint32_t v = 0; v < scene.cameras.size(); ++v) {
+    const io::Camera& cam = scene.cameras[v];
+    if (cam.image.empty() || cam.mask.empty()) {
+      log::warn("fur: camera '", cam.name, "' has no ", cam.image.empty() ? "photo" : "mask", "; it is not used");
+      continue;
+    }
+    (io::is_held_out(v, hold_out_every) ? held_out : train).push_back(v);
+  }
+  if (train.empty() && !held_out.empty()) train.swap(held_out);  // a single view trains
+}
+
+// The views' targets at the stage's resolution, cropped to the masks; returns the log's figures.
+json make_views(StageContext& c, const FurSettings& s, FurInputs& in) {
   std::vector<std::uint32_t> train_ids, held_ids;
   split_views(c.scene, s.hold_out_every, train_ids, held_ids);
   std::vector<std::uint32_t> all(c.scene.cameras.size());
@@ -322,122 +241,206 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
   const std::vector<std::string> names = io::view_file_names(c.scene, all);
   fur::FurViewOptions view_options;
   view_options.max_side = s.resolution, view_options.margin_px = s.margin_px;
-  const auto make_views = [&](const std::vector<std::uint32_t>& ids, std::vector<fur::FurView>& views) {
+  const fs::path masks = defur_outputs(c.work).masks();
+  const auto make = [&](const std::vector<std::uint32_t>& ids, std::vector<fur::FurView>& views) {
     for (std::uint32_t v : ids) {
-      const fs::path nonbald_file = d.masks() / (names[v] + ".png");
+      const fs::path nonbald_file = masks / (names[v] + ".png");
       // The defur stage's non-bald masks belong to the pipeline's M_bald, not to the true one.
       const std::optional<io::Image> nonbald =
           s.truth != "all" && fs::exists(nonbald_file) ? std::optional(io::read_image(nonbald_file)) : std::nullopt;
-      views.push_back(fur::make_fur_view(c.gpu, c.scene, v, nonbald ? &*nonbald : nullptr, bald, view_options));
+      views.push_back(fur::make_fur_view(c.gpu, c.scene, v, nonbald ? &*nonbald : nullptr, in.bald, view_options));
     }
   };
-  make_views(train_ids, data.train);
-  make_views(held_ids, data.held_out);
+  make(train_ids, in.data.train);
+  make(held_ids, in.data.held_out);
   std::uint64_t rendered = 0, full = 0;
-  for (const fur::FurView& v : data.train) rendered += v.pixels(), full += std::uint64_t(c.scene.cameras[v.camera].width) * c.scene.cameras[v.camera].height;
-  seconds["views"] = t.seconds();
   double reliability = 0;
-  for (const fur::FurView& v : data.train) reliability += v.orientation_reliability / double(data.train.size());
+  for (const fur::FurView& v : in.data.train) {
+    rendered += v.pixels(), full += std::uint64_t(c.scene.cameras[v.camera].width) * c.scene.cameras[v.camera].height;
+    reliability += v.orientation_reliability / double(in.data.train.size());
+  }
+  const std::uint64_t per_view = rendered / std::max<std::size_t>(1, in.data.train.size());
   log::info("fur: the photos' orientation maps are ", 100.0 * reliability, " % reliable on the fur (their coherence above noise)");
-  log::info("fur: ", data.roots.size(), " roots, ", data.train.size(), " training views and ", data.held_out.size(),
-            " held out; rendering ", rendered / std::max<std::size_t>(1, data.train.size()), " pixels a view (",
-            full ? 100.0 * double(rendered) / double(full) : 0.0, " % of the photos' pixels)");
-  if (data.train.empty()) log::warn("fur: no view has a photo and a mask; only the geometric losses will shape the fur");
+  log::info("fur: ", in.data.roots.size(), " roots, ", in.data.train.size(), " training views and ", in.data.held_out.size(),
+            " held out; rendering ", per_view, " pixels a view (", full ? 100.0 * double(rendered) / double(full) : 0.0, " % of the photos' pixels)");
+  if (in.data.train.empty()) log::warn("fur: no view has a photo and a mask; only the geometric losses will shape the fur");
+  return {{"train", in.data.train.size()}, {"held_out", in.data.held_out.size()}, {"orientation_reliability", reliability},
+          {"rendered_pixels_per_view", per_view}, {"rendered_fraction_of_photo", full ? double(rendered) / double(full) : 0.0}};
+}
 
-  // The ground truth (synth scenes) for the scores and the curve.
-  metrics::GroomTruth truth;
-  std::optional<metrics::StrandSample> gt_sample, gt_rendered;  // for the metrics; for the held-out views
-  std::optional<geometry::Mesh> gt_outer;
-  json gt_info;
-  const std::uint32_t score_strands = s.score_strands ? s.score_strands : s.training.strands;
-  if (const auto gt = io::find_ground_truth(c.scene_dir)) {
-    if (fs::exists(gt->strands())) {
-      const io::StrandSet gt_hair = io::read_hair(gt->strands());
-      gt_sample = metrics::sample_strands(gt_hair, s.metric_strands, s.metric_points, 2);
-      // As many as the field's scored strands, so that both render at the same width.
-      gt_rendered = metrics::sample_strands(gt_hair, std::min<std::uint32_t>(score_strands, std::uint32_t(data.roots.size())), fur::kStrandPoints, 3);
-    }
-    if (fs::exists(gt->outer())) gt_outer = io::read_mesh(gt->outer());
-    truth.strands = gt_sample ? &*gt_sample : nullptr;
-    truth.outer = gt_outer ? &*gt_outer : nullptr;
-    gt_info = {{"strands", "gt/strands.hair"}, {"outer", "gt/outer.ply"}};
-    if (std::abs(gt->cm_per_unit - cm) > 1e-3 * gt->cm_per_unit)
-      log::warn("fur: the knowledge's scale (", cm, " cm per unit) differs from the ground truth's (", gt->cm_per_unit, "); metrics use the knowledge's");
+// The steps to train: all of them, or only the warm-up where no training photo resolves the fur
+// (select=auto): without a photo the later steps have only the chamfer and curvature, which pull
+// the strands off the warm start with nothing to say where they should go.
+std::uint32_t steps_to_train(const FurSettings& s, const fur::FurTrainer& trainer, const fur::FurTrainingData& data) {
+  if (s.select == "auto" && !data.train.empty() && !trainer.any_view_resolves_fur() && s.training.steps > s.training.warm_steps) {
+    log::warn("fur: no training photo resolves the fur, so training stops after the ", s.training.warm_steps,
+              " warm-up steps (fur.select=trained runs all ", s.training.steps, ")");
+    return s.training.warm_steps;
   }
+  return s.training.steps;
+}
 
-  // Training, resumable.
-  t.restart();
-  std::unique_ptr<fur::StrandPrior> prior = fur::shipped_strand_prior(c.gpu);
-  auto make_trainer = [&] { return std::make_unique<fur::FurTrainer>(c.gpu, data, *prior, s.field, s.training); };
-  std::unique_ptr<fur::FurTrainer> trainer = make_trainer();
-  const json resolution = log_fur_resolution(trainer->view_resolution(), s.training.resolved_fur_px);
-  const fs::path checkpoint = resume / "checkpoint.nfwt";
-  const fs::path curve_checkpoint = resume / "curve.jsonl";
-  std::string curve_lines;  // curve.jsonl so far, kept beside the checkpoint
-  if (resume_or_discard("fur", checkpoint, [&] { return trainer->load_checkpoint(checkpoint); },
-                        [&] {
-                          prior = fur::shipped_strand_prior(c.gpu);
-                          trainer = make_trainer();
-                        })) {
-    log::info("fur: resuming from ", checkpoint.string(), " at step ", trainer->step());
-    if (std::ifstream in(curve_checkpoint); s.curve_seconds > 0 && in) curve_lines.assign(std::istreambuf_iterator<char>(in), {});
-  }
-  // The curve: a point before the first step, every curve_seconds of training, and at the end. Its
-  // scoring is not training time (the x axis is the trainer's own clock).
-  double next_curve_point = 0;
-  std::uint32_t last_curve_step = 0;
-  const auto add_curve_point = [&] {
-    const json p = curve_point(*trainer, data, s, c.scene, truth, cm, score_strands);
-    curve_lines += p.dump() + "\n";
-    write_file_atomic(curve_checkpoint, curve_lines);
-    last_curve_step = trainer->step();
-    next_curve_point = (std::floor(p["seconds"].get<double>() / s.curve_seconds) + 1) * s.curve_seconds;
-    if (p.contains("fscore"))
-      log::info("fur: curve at ", p["seconds"].get<double>(), " s (step ", trainer->step(), "): F(2 cm, 20 deg) ",
-                p["fscore"].value("2cm_20deg", 0.0), ", F(2 mm, 20 deg) ", p["fscore"].value("2mm_20deg", 0.0),
-                ", held-out orientation ", p["held_out"]["orientation_error_deg"].get<double>(), " deg");
-  };
-  if (s.curve_seconds > 0) {
-    if (curve_lines.empty()) add_curve_point();
-    else {
-      // Points taken after the checkpoint's step are taken again.
-      std::istringstream lines(curve_lines);
-      curve_lines.clear();
-      for (std::string line; std::getline(lines, line);) {
-        const json p = json::parse(line, nullptr, false);
-        if (!p.is_object() || !p.contains("seconds") || !p["seconds"].is_number() || !p.contains("step") || !p["step"].is_number_unsigned())
-          throw InputError(curve_checkpoint.string() + ": not a curve; delete it to start the curve anew");
-        if (p["step"].get<std::uint32_t>() > trainer->step()) break;
-        curve_lines += line + "\n";
-        last_curve_step = p["step"].get<std::uint32_t>();
-        next_curve_point = (std::floor(p["seconds"].get<double>() / s.curve_seconds) + 1) * s.curve_seconds;
-      }
-      if (curve_lines.empty()) add_curve_point();
-    }
-  }
-  log::info("fur: ", s.training.steps, " steps of ", std::min<std::size_t>(s.training.strands, data.roots.size()), " strands (", s.training.warm_steps,
-            " warm-up), strand width ", trainer->strand_width(trainer->batch()) * cm * 10.0, " mm");
-  Progress progress("fur", s.training.steps);
-  trainer->train(s.training.steps, checkpoint, [&](const fur::FurStepReport& r) {
+// Trains (resuming from `checkpoint` when it fits), with the curve; Interrupted saves a checkpoint.
+void train(StageContext& c, const FurSettings& s, const FurInputs& in, std::unique_ptr<fur::StrandPrior>& prior,
+           std::unique_ptr<fur::FurTrainer>& trainer, FurCurve& curve, const fs::path& checkpoint) {
+  auto make_trainer = [&] { return std::make_unique<fur::FurTrainer>(c.gpu, in.data, *prior, s.field, s.training); };
+  trainer = make_trainer();
+  const bool resumed = resume_or_discard("fur", checkpoint, [&] { return trainer->load_checkpoint(checkpoint); },
+                                         [&] {
+                                           prior = fur::shipped_strand_prior(c.gpu);
+                                           trainer = make_trainer();
+                                         });
+  if (resumed) log::info("fur: resuming from ", checkpoint.string(), " at step ", trainer->step());
+  curve.start(*trainer, in.data, c.scene, resumed);
+  const std::uint32_t steps = steps_to_train(s, *trainer, in.data);
+  log::info("fur: ", steps, " steps of ", std::min<std::size_t>(s.training.strands, in.data.roots.size()), " strands (", s.training.warm_steps,
+            " warm-up), strand width ", trainer->strand_width(trainer->batch()) * in.cm * 10.0, " mm");
+  Progress progress("fur", steps);
+  trainer->train(steps, checkpoint, [&](const fur::FurStepReport& r) {
     char status[200];
     if (r.warm)
       std::snprintf(status, sizeof status, "warm-up: direction %.4f penetration %.2e", r.direction, r.penetration);
     else
-      std::snprintf(status, sizeof status, "loss %.4f sil %.3f orient %.4f chamfer %.2e", r.loss, r.silhouette, r.orientation, r.chamfer);
+      std::snprintf(status, sizeof status, "loss %.4f sil %.3f orient %.4f chamfer %.2e length x%.2f", r.loss, r.silhouette, r.orientation,
+                    r.chamfer, r.length_factor_mean);
     progress.update(r.step, status);
-    if (s.curve_seconds > 0 && r.seconds >= next_curve_point && !interrupted()) add_curve_point();
+    if (!interrupted()) curve.after_step(*trainer, in.data, c.scene, r.seconds);
     return !interrupted();
   });
   if (interrupted()) {
     trainer->save_checkpoint(checkpoint);
     progress.finish("stopped");
-    throw Interrupted("fur: stopped at step " + std::to_string(trainer->step()) + " of " + std::to_string(s.training.steps) +
-                      "; checkpoint saved in " + checkpoint.string());
+    throw Interrupted("fur: stopped at step " + std::to_string(trainer->step()) + " of " + std::to_string(steps) + "; checkpoint saved in " +
+                      checkpoint.string());
   }
   progress.finish();
-  if (s.curve_seconds > 0 && last_curve_step != trainer->step()) add_curve_point();
-  if (s.curve_seconds > 0) write_file_atomic(out.curve(), curve_lines);
+}
+
+// Which groom to keep (fur_selection.hpp); leaves the trainer's field at it. Returns the record.
+json select_groom(StageContext& c, const FurSettings& s, const FurInputs& in, fur::FurTrainer& trainer, const FurGroundTruth& gt) {
+  const fur::FurFieldState* warm = trainer.warm_state();
+  if (s.select == "trained" || !warm || warm->step == trainer.step()) return {{"kept", "trained"}, {"reason", s.select == "trained" ? "fur.select=trained" : "no image step ran"}};
+  if (s.select == "warm") {
+    trainer.set_state(*warm);
+    return {{"kept", "warm-up"}, {"reason", "fur.select=warm"}};
+  }
+  const fur::FurFieldState trained = trainer.state();
+  // Each candidate's signals and, on synth scenes, its scores against the truth (for the docs).
+  const auto measure = [&](json& record) {
+    const GroomSignals g = measure_groom(trainer, in.data, c.scene, *in.envelope, s, in.cm);
+    record = to_json(g);
+    if (gt.sample) {
+      const io::StrandSet strands = field_strands(trainer, in.data.roots, s.metric_strands, s.training.seed + 17);
+      const json scores = metrics::groom_scores(metrics::sample_strands(strands, s.metric_strands, s.metric_points, 1), gt.truth(), in.cm);
+      if (scores.contains("fscore")) record["fscore"] = scores["fscore"];
+    }
+    return g;
+  };
+  json record;
+  const GroomSignals t_signals = measure(record["trained"]);
+  trainer.set_state(*warm);
+  const GroomSignals w_signals = measure(record["warm"]);
+  const GroomChoice choice = choose_groom(w_signals, t_signals);
+  if (choice.trained) trainer.set_state(trained);
+  record["kept"] = choice.trained ? "trained" : "warm-up";
+  record["reason"] = choice.reason;
+  log::info("fur: keeping the ", choice.trained ? "trained groom" : "warm-up's groom (the knowledge, M_bald and M_NeuS alone)", ": ", choice.reason);
+  return record;
+}
+
+// The kept groom's strands at `strands` roots, streamed to strands.hair with their regions; every
+// k-th strand kept for the scores (the roots are stratified over the fur, so a uniform subset).
+struct InferredGroom {
+  const fur::Roots* roots = nullptr;
+  fur::Roots drawn;  // when the count differs from the training roots
+  bool own_roots = false;
+  std::vector<std::uint32_t> sample_ids;
+  std::vector<float> sample_xyz;
+};
+void infer_groom(StageContext& c, const FurSettings& s, const FurInputs& in, fur::FurTrainer& trainer, const FurOutputs& out,
+                 const std::function<void(const char*)>& stop_if_interrupted, InferredGroom& g) {
+  g.roots = &in.data.roots;
+  if (s.strands != in.data.roots.size()) {
+    const fur::FaceFrames frames = in.swapped ? in.swapped->frames : read_face_frames(frames_outputs(c.work).frames(), in.bald.triangle_count());
+    g.drawn = fur::sample_roots(in.bald, frames, in.vertex_fur, s.strands, s.training.seed + 11);
+    g.roots = &g.drawn;
+  }
+  // What edit and export need to know where each strand grows, when it is not frames/roots.npz.
+  g.own_roots = g.roots != &in.data.roots || in.swapped.has_value();
+  if (g.own_roots) fur::write_roots(out.roots(), *g.roots);
+  const std::uint32_t n = std::uint32_t(g.roots->size());
+  std::vector<std::uint32_t> ids(n);
+  for (std::uint32_t i = 0; i < n; ++i) ids[i] = i;
+  const std::uint32_t every = std::max<std::uint32_t>(1, n / std::max<std::uint32_t>(1, s.metric_strands));
+  io::write_uniform_hair(out.strands(), n, fur::kStrandPoints, [&](const auto& write) {
+    trainer.field().infer(*g.roots, ids, 65536, [&](std::size_t first, std::uint32_t count, const std::vector<float>& points, const std::vector<float>&) {
+      stop_if_interrupted("inference");  // the partial file is removed
+      write(std::span<const float>(points));
+      for (std::uint32_t k = 0; k < count; ++k)
+        if ((first + k) % every == 0) {
+          g.sample_ids.push_back(std::uint32_t(first + k));
+          g.sample_xyz.insert(g.sample_xyz.end(), points.begin() + std::ptrdiff_t(std::size_t(k) * fur::kStrandPoints * 3),
+                              points.begin() + std::ptrdiff_t(std::size_t(k + 1) * fur::kStrandPoints * 3));
+        }
+    });
+  });
+  io::NpyWrite regions{"region", {n}, "<i4", {}};
+  regions.values.reserve(n);
+  for (std::uint32_t i = 0; i < n; ++i) regions.values.push_back(g.roots->region[i]);
+  io::write_npz(out.regions(), {regions});
+}
+
+// The groom over the held-out views (else the first training views).
+json write_previews(StageContext& c, const FurSettings& s, const FurInputs& in, fur::FurTrainer& trainer, const FurOutputs& out,
+                    const std::vector<std::vector<float>>& held_images) {
+  json previews = json::array();
+  if (s.preview_views <= 0) return previews;
+  std::vector<std::uint32_t> all(c.scene.cameras.size());
+  for (std::uint32_t v = 0; v < all.size(); ++v) all[v] = v;
+  const std::vector<std::string> names = io::view_file_names(c.scene, all);
+  const std::uint32_t scored = s.score_strands ? s.score_strands : s.training.strands;
+  fs::create_directories(out.previews());
+  const std::vector<fur::FurView>& source = in.data.held_out.empty() ? in.data.train : in.data.held_out;
+  for (std::size_t i = 0; i < source.size() && previews.size() < std::size_t(s.preview_views); ++i) {
+    const std::vector<float> image =
+        i < held_images.size() && !in.data.held_out.empty() ? held_images[i] : trainer.render(source[i], scored, s.training.seed + 7);
+    const fs::path file = out.previews() / (names[source[i].camera] + ".png");
+    io::write_png(file, preview_image(source[i], image));
+    previews.push_back(file.filename().string());
+  }
+  return previews;
+}
+
+}  // namespace
+
+json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& resume) {
+  const FurSettings s = settings_of(c);
+  const FurOutputs out{out_dir};
+  const Stopwatch t_all;
+  json seconds = json::object();
+  Stopwatch t;
+
+  FurInputs in = read_inputs(c, s);
+  write_file_atomic(out.scale(), json{{"cm_per_unit", in.cm}, {"source", in.swapped ? "gt/scene.json" : "knowledge/scale.json"}}.dump(2) + "\n");
+  if (in.data.roots.size() == 0) return write_bald_groom(out);
+  seconds["read"] = t.seconds();
+
+  t.restart();
+  json views = make_views(c, s, in);
+  seconds["views"] = t.seconds();
+  const std::uint32_t scored = s.score_strands ? s.score_strands : s.training.strands;
+  const FurGroundTruth gt = read_fur_ground_truth(c.scene_dir, s, std::min<std::uint32_t>(scored, std::uint32_t(in.data.roots.size())), in.cm);
+
+  t.restart();
+  std::unique_ptr<fur::StrandPrior> prior = fur::shipped_strand_prior(c.gpu);
+  std::unique_ptr<fur::FurTrainer> trainer;
+  const fs::path checkpoint = resume / "checkpoint.nfwt";
+  FurCurve curve(s, resume / "curve.jsonl", gt, in.cm);
+  train(c, s, in, prior, trainer, curve, checkpoint);
+  curve.finish(*trainer, in.data, c.scene, out.curve());
   seconds["train"] = t.seconds();
+  const json resolution = log_fur_resolution(trainer->view_resolution(), s.training.resolved_fur_px);
+  for (const char* key : {"fur_pixels_median", "image_weight_mean", "views_without_image_losses"}) views[key] = resolution[key];
   // After training, Ctrl-C or a kill stops at the next chunk of work with the trained state saved:
   // the same command then resumes at the last step and only redoes what follows.
   const auto stop_if_interrupted = [&](const char* during) {
@@ -447,115 +450,71 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
                       " steps; checkpoint saved in " + checkpoint.string());
   };
   std::string loss_curve;
-  for (const fur::FurStepReport& r : trainer->history()) loss_curve += step_json(r).dump() + "\n";
+  for (const fur::FurStepReport& r : trainer->history()) loss_curve += fur::to_json(r).dump() + "\n";
   write_file_atomic(out.training(), loss_curve);
 
+  t.restart();
+  const json selection = select_groom(c, s, in, *trainer, gt);
+  seconds["selection"] = t.seconds();
+  stop_if_interrupted("the selection");
   fur::save_fur_model(out.model(), trainer->field(), *prior, trainer->step(), s.training.train_decoder);
 
-  // Held-out views.
+  // Held-out views: the kept groom, the baseline groom on the same roots, the true groom (synth).
   t.restart();
   std::vector<std::vector<float>> held_images;
   const auto stop_if_scoring_interrupted = [&] { stop_if_interrupted("scoring"); };
-  const HeldOutScores held = score_field_held_out(*trainer, data.held_out, c.scene, score_strands, s.training.seed + 7, &held_images,
+  const HeldOutScores held = score_field_held_out(*trainer, in.data.held_out, c.scene, scored, s.training.seed + 7, &held_images,
                                                   stop_if_scoring_interrupted);
-  // The baseline groom on the roots the field was just scored at, and the true groom (synth).
   json held_json = held_out_json(held);
   held_json["views"] = held.views;
-  if (!data.held_out.empty()) {
-    const std::vector<std::uint32_t> scored_ids = fur::sample_indices(data.roots.size(), score_strands, s.training.seed + 7);
-    const io::StrandSet held_baseline = fur::baseline_groom(data.roots, scored_ids, s.training.lying_angle_deg, fur::kStrandPoints);
-    held_json["baseline"] = held_out_json(score_strands_held_out(*trainer, data.held_out, c.scene, held_baseline.points, stop_if_scoring_interrupted));
-    if (gt_rendered && gt_rendered->strands > 0)
-      held_json["truth"] = held_out_json(score_strands_held_out(*trainer, data.held_out, c.scene, gt_rendered->xyz, stop_if_scoring_interrupted));
+  if (!in.data.held_out.empty()) {
+    const std::vector<std::uint32_t> scored_ids = fur::sample_indices(in.data.roots.size(), scored, s.training.seed + 7);
+    const io::StrandSet held_baseline = fur::baseline_groom(in.data.roots, scored_ids, s.training.lying_angle_deg, fur::kStrandPoints);
+    held_json["baseline"] = held_out_json(score_strands_held_out(*trainer, in.data.held_out, c.scene, held_baseline.points, stop_if_scoring_interrupted));
+    if (gt.rendered && gt.rendered->strands > 0)
+      held_json["truth"] = held_out_json(score_strands_held_out(*trainer, in.data.held_out, c.scene, gt.rendered->xyz, stop_if_scoring_interrupted));
     log::info("fur: held-out orientation error ", held.orientation_error_deg, " deg (baseline ", held_json["baseline"]["orientation_error_deg"].get<double>(),
               held_json.contains("truth") ? ", true groom " + std::to_string(held_json["truth"]["orientation_error_deg"].get<double>()) : std::string(), ")");
   }
   seconds["held_out"] = t.seconds();
 
-  // Inference: the roots file when the count matches, else as many roots drawn anew.
   t.restart();
-  fur::Roots infer_roots;
-  const fur::Roots* roots = &data.roots;
-  if (s.strands != data.roots.size()) {
-    const fur::FaceFrames frames = swapped ? swapped->frames : read_face_frames(f.frames(), bald.triangle_count());
-    infer_roots = fur::sample_roots(bald, frames, vertex_fur, s.strands, s.training.seed + 11);
-    roots = &infer_roots;
-  }
-  // What edit and export need to know where each strand grows, when it is not frames/roots.npz.
-  const bool own_roots = roots != &data.roots || swapped.has_value();
-  if (own_roots) fur::write_roots(out.roots(), *roots);
-  const std::uint32_t n = std::uint32_t(roots->size());
-  std::vector<std::uint32_t> ids(n);
-  for (std::uint32_t i = 0; i < n; ++i) ids[i] = i;
-  // Every k-th strand for the metrics: the roots are stratified over the fur's area, so this is a
-  // uniform subset.
-  const std::uint32_t every = std::max<std::uint32_t>(1, n / std::max<std::uint32_t>(1, s.metric_strands));
-  std::vector<float> sample_xyz;
-  std::vector<std::uint32_t> sample_ids;
-  io::write_uniform_hair(out.strands(), n, fur::kStrandPoints, [&](const auto& write) {
-    trainer->field().infer(*roots, ids, 65536, [&](std::size_t first, std::uint32_t count, const std::vector<float>& points, const std::vector<float>&) {
-      stop_if_interrupted("inference");  // the partial file is removed
-      write(std::span<const float>(points));
-      for (std::uint32_t k = 0; k < count; ++k)
-        if ((first + k) % every == 0) {
-          sample_ids.push_back(std::uint32_t(first + k));
-          sample_xyz.insert(sample_xyz.end(), points.begin() + std::ptrdiff_t(std::size_t(k) * fur::kStrandPoints * 3),
-                            points.begin() + std::ptrdiff_t(std::size_t(k + 1) * fur::kStrandPoints * 3));
-        }
-    });
-  });
-  {
-    io::NpyWrite regions{"region", {n}, "<i4", {}};
-    regions.values.reserve(n);
-    for (std::uint32_t i = 0; i < n; ++i) regions.values.push_back(roots->region[i]);
-    io::write_npz(out.regions(), {regions});
-  }
+  InferredGroom groom;
+  infer_groom(c, s, in, *trainer, out, stop_if_interrupted, groom);
+  const std::uint32_t n = std::uint32_t(groom.roots->size());
   seconds["inference"] = t.seconds();
   log::info("fur: ", n, " strands inferred and written in ", seconds["inference"].get<double>(), " s");
 
   // Scores: the groom and the baseline groom (straight, lifted, on the same roots).
   stop_if_interrupted("the scores");
   t.restart();
-  const io::StrandSet groom = io::StrandSet::uniform(std::uint32_t(sample_ids.size()), fur::kStrandPoints, std::move(sample_xyz));
-  const io::StrandSet baseline = fur::baseline_groom(*roots, sample_ids, s.training.lying_angle_deg);
-  const metrics::StrandSample groom_sample = metrics::sample_strands(groom, s.metric_strands, s.metric_points, 1);
-  const metrics::StrandSample baseline_sample = metrics::sample_strands(baseline, s.metric_strands, s.metric_points, 1);
-  const json groom_scores = metrics::groom_scores(groom_sample, truth, cm);
-  const json baseline_scores = metrics::groom_scores(baseline_sample, truth, cm);
+  const io::StrandSet groom_strands = io::StrandSet::uniform(std::uint32_t(groom.sample_ids.size()), fur::kStrandPoints, std::move(groom.sample_xyz));
+  const io::StrandSet baseline = fur::baseline_groom(*groom.roots, groom.sample_ids, s.training.lying_angle_deg);
+  const json groom_scores = metrics::groom_scores(metrics::sample_strands(groom_strands, s.metric_strands, s.metric_points, 1), gt.truth(), in.cm);
+  const json baseline_scores = metrics::groom_scores(metrics::sample_strands(baseline, s.metric_strands, s.metric_points, 1), gt.truth(), in.cm);
   seconds["metrics"] = t.seconds();
   if (groom_scores.contains("fscore"))
     log::info("fur: F-score at (2 cm, 20 deg) ", groom_scores["fscore"].value("2cm_20deg", 0.0), " (baseline ",
               baseline_scores["fscore"].value("2cm_20deg", 0.0), "); at (2 mm, 20 deg) ", groom_scores["fscore"].value("2mm_20deg", 0.0),
               " (baseline ", baseline_scores["fscore"].value("2mm_20deg", 0.0), ")");
 
-  // Previews: the held-out views (else the first training views).
   t.restart();
-  json previews = json::array();
-  if (s.preview_views > 0) {
-    fs::create_directories(out.previews());
-    const std::vector<fur::FurView>& source = data.held_out.empty() ? data.train : data.held_out;
-    for (std::size_t i = 0; i < source.size() && previews.size() < std::size_t(s.preview_views); ++i) {
-      const std::vector<float> image = i < held_images.size() && !data.held_out.empty() ? held_images[i] : trainer->render(source[i], score_strands, s.training.seed + 7);
-      const fs::path file = out.previews() / (names[source[i].camera] + ".png");
-      io::write_png(file, preview_image(source[i], image));
-      previews.push_back(file.filename().string());
-    }
-  }
+  const json previews = write_previews(c, s, in, *trainer, out, held_images);
   seconds["previews"] = t.seconds();
 
   const fur::FurStepReport last = trainer->last_report();
+  const knowledge::Knowledge knowledge = knowledge::read_knowledge(knowledge_outputs(c.work).knowledge());
   json summary{{"strands", n},
-               {"roots_file", own_roots ? "fur/roots.npz" : "frames/roots.npz"},
+               {"roots_file", groom.own_roots ? "fur/roots.npz" : "frames/roots.npz"},
                {"steps", trainer->step()},
-               {"training_strands_per_step", std::min<std::size_t>(s.training.strands, data.roots.size())},
-               {"strand_width_mm", trainer->strand_width(trainer->batch()) * cm * 10.0},
+               {"training_strands_per_step", std::min<std::size_t>(s.training.strands, in.data.roots.size())},
+               {"strand_width_mm", trainer->strand_width(trainer->batch()) * in.cm * 10.0},
                {"skipped_steps", last.skipped_steps},
                {"final", fur::to_json(last)},
-               {"views", {{"train", data.train.size()}, {"held_out", data.held_out.size()}, {"orientation_reliability", reliability},
-                          {"fur_pixels_median", resolution["fur_pixels_median"]}, {"image_weight_mean", resolution["image_weight_mean"]},
-                          {"views_without_image_losses", resolution["views_without_image_losses"]},
-                          {"rendered_pixels_per_view", rendered / std::max<std::size_t>(1, data.train.size())},
-                          {"rendered_fraction_of_photo", full ? double(rendered) / double(full) : 0.0}}},
+               {"views", views},
+               {"selection", selection},
+               {"lengths", fur::length_factors_json(trainer->field().length_factors(), in.data.roots, in.cm,
+                                                    [](std::int32_t r) { return body::region_name(r); })},
                {"held_out", held_json},
                {"groom", groom_scores},
                {"baseline", baseline_scores},
@@ -563,14 +522,10 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
                {"seconds", seconds},
                {"seconds_per_step", trainer->step() ? last.seconds / trainer->step() : 0.0},
                {"peak_device_bytes", c.gpu.peak_allocated_bytes()}};
-  if (!gt_info.is_null()) summary["ground_truth"] = gt_info;
-  if (swapped) summary["truth"] = s.truth;
-  if (s.curve_seconds > 0) {
-    json curve = json::array();
-    std::istringstream lines(curve_lines);
-    for (std::string line; std::getline(lines, line);) curve.push_back(json::parse(line));
-    summary["curve"] = curve;
-  }
+  summary["lengths"]["cm_per_unit_eyes"] = in.cm;  // the knowledge stage's scale (eyes, scene file or --scene-scale)
+  if (!gt.info.is_null()) summary["ground_truth"] = gt.info;
+  if (in.swapped) summary["truth"] = s.truth;
+  if (curve.enabled()) summary["curve"] = curve.points();
   summary["seconds_total"] = t_all.seconds();
   write_file_atomic(out.metrics(), summary.dump(2) + "\n");
   return summary;
@@ -613,7 +568,7 @@ const SettingsSchema<FurSettings>& fur_settings() {
         .add("train_decoder", [](F& f) -> auto& { return f.training.train_decoder; }, 0, 1, "fine-tune the strand prior's decoder too")
         .add("resolution", [](F& f) -> auto& { return f.resolution; }, 0, 65536, "longer side of the rendered views in pixels (0: the photos')")
         .add("margin_px", [](F& f) -> auto& { return f.margin_px; }, 0, 4096, "pixels rendered around each view's mask box")
-        .add("hold_out_every", [](F& f) -> auto& { return f.hold_out_every; }, 0, 1000, "every k-th camera is held out for scoring (0: none)")
+        .add("hold_out_every", [](F& f) -> auto& { return f.hold_out_every; }, 0, 1000, "every k-th camera is held out for scoring (0 or 1: none)")
         .add("strands", [](F& f) -> auto& { return f.strands; }, 0, 4e7, "strands inferred into strands.hair")
         .add("metric_strands", [](F& f) -> auto& { return f.metric_strands; }, 1, 1e7, "strands the metrics compare")
         .add("metric_points", [](F& f) -> auto& { return f.metric_points; }, 2, 1000, "points per strand the metrics compare")
@@ -623,6 +578,12 @@ const SettingsSchema<FurSettings>& fur_settings() {
         .add("seed", [](F& f) -> auto& { return f.training.seed; }, 0, 4294967295.0, "random seed (initialisation, roots, views)")
         .add("curve_seconds", [](F& f) -> auto& { return f.curve_seconds; }, 0, 1e6,
              "training seconds between two points of curve.jsonl: held-out and ground-truth scores while it trains (0: none)")
+        .add("length_lr", [](F& f) -> auto& { return f.training.length_lr; }, 0, 1,
+             "Adam learning rate of the per-region length factors learned after the warm-up (0: the knowledge's lengths)")
+        .add("length_min", [](F& f) -> auto& { return f.training.length_bounds.lo; }, 0.01, 1, "the smallest length factor")
+        .add("length_max", [](F& f) -> auto& { return f.training.length_bounds.hi; }, 1, 100, "the largest length factor")
+        .text("select", [](F& f) -> auto& { return f.select; }, {"auto", "trained", "warm"},
+              "the groom kept: auto (the trained one where the held-out views and M_NeuS say the image steps helped), trained, or warm (the warm-up's)")
         .text("truth", [](F& f) -> auto& { return f.truth; }, {"none", "knowledge", "all"},
               "synth scenes: train on the true knowledge (knowledge) or the true bald body, knowledge and roots (all), to measure what the earlier stages' errors cost")
         .check([](const F& f) { f.training.validate(); });

@@ -1,0 +1,61 @@
+#include "engine/pipeline/fur_selection.hpp"
+
+#include <cstdio>
+
+#include "engine/metrics/strand_metrics.hpp"
+#include "engine/metrics/surface_metrics.hpp"
+#include "engine/pipeline/fur_evaluation.hpp"
+#include "engine/pipeline/fur_stage.hpp"
+
+namespace nf::pipeline {
+
+json to_json(const GroomSignals& g) {
+  json j{{"tips_to_envelope_mm", g.tips_to_envelope_mm}, {"envelope_to_tips_mm", g.envelope_to_tips_mm}, {"envelope_mm", g.envelope_mm()}};
+  if (g.held_out) j["held_out"] = {{"silhouette_iou", g.silhouette_iou}, {"orientation_error_deg", g.orientation_error_deg}};
+  return j;
+}
+
+GroomChoice choose_groom(const GroomSignals& warm, const GroomSignals& trained, const GroomChoiceTolerances& tol) {
+  char why[300];
+  const bool held = warm.held_out && trained.held_out;
+  const double env_w = warm.envelope_mm(), env_t = trained.envelope_mm();
+  if (env_t > env_w * (1 + tol.envelope) + 1e-9) {
+    std::snprintf(why, sizeof why, "the image steps moved the tips off M_NeuS (chamfer %.2f mm against %.2f)", env_t, env_w);
+    return {false, why};
+  }
+  if (held && trained.silhouette_iou < warm.silhouette_iou - tol.iou) {
+    std::snprintf(why, sizeof why, "the held-out silhouette got worse (IoU %.3f against %.3f)", trained.silhouette_iou, warm.silhouette_iou);
+    return {false, why};
+  }
+  if (held && trained.orientation_error_deg > warm.orientation_error_deg + tol.orientation_deg) {
+    std::snprintf(why, sizeof why, "the held-out orientation got worse (%.2f deg against %.2f)", trained.orientation_error_deg,
+                  warm.orientation_error_deg);
+    return {false, why};
+  }
+  const bool gains = env_t < env_w * (1 - tol.envelope) ||
+                     (held && (trained.silhouette_iou > warm.silhouette_iou + tol.iou ||
+                               trained.orientation_error_deg < warm.orientation_error_deg - tol.orientation_deg));
+  if (!gains) return {false, "the image steps gained on no signal beyond its tolerance"};
+  if (held)
+    std::snprintf(why, sizeof why, "held-out IoU %.3f (warm-up %.3f), orientation %.2f deg (%.2f), M_NeuS chamfer %.2f mm (%.2f)",
+                  trained.silhouette_iou, warm.silhouette_iou, trained.orientation_error_deg, warm.orientation_error_deg, env_t, env_w);
+  else
+    std::snprintf(why, sizeof why, "M_NeuS chamfer %.2f mm (warm-up %.2f); no held-out view", env_t, env_w);
+  return {true, why};
+}
+
+GroomSignals measure_groom(fur::FurTrainer& trainer, const fur::FurTrainingData& data, const io::Scene& scene, const geometry::Mesh& envelope,
+                           const FurSettings& s, double cm) {
+  GroomSignals g;
+  if (!data.held_out.empty()) {
+    const std::uint32_t scored = s.score_strands ? s.score_strands : s.training.strands;
+    const HeldOutScores h = score_field_held_out(trainer, data.held_out, scene, scored, s.training.seed + 7, nullptr);
+    g.held_out = true, g.silhouette_iou = h.silhouette_iou, g.orientation_error_deg = h.orientation_error_deg;
+  }
+  const io::StrandSet strands = field_strands(trainer, data.roots, s.metric_strands, s.training.seed + 17);
+  const metrics::TipChamfer tips = metrics::tip_chamfer(metrics::sample_strands(strands, s.metric_strands, s.metric_points, 1), envelope, cm);
+  g.tips_to_envelope_mm = tips.tips_to_surface_mm, g.envelope_to_tips_mm = tips.surface_to_tips_mm;
+  return g;
+}
+
+}  // namespace nf::pipeline

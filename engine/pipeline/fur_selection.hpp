@@ -1,0 +1,50 @@
+#pragma once
+// Never worse than the warm start: the fur stage keeps the groom its image steps made only where
+// the data it has says they helped. Two candidates: the field when the warm-up ended (the knowledge,
+// M_bald and M_NeuS alone) and the trained field. Each is measured on what the stage has without a
+// ground truth:
+//   - the held-out views: silhouette IoU and the reliability-weighted orientation error;
+//   - M_NeuS, the envelope of the fur: the two-way chamfer between the strands' tips and M_NeuS
+//     (tips far outside it are fur where the photos show none; M_NeuS far from every tip is fur
+//     that does not reach where they show some).
+// The held-out orientation error alone can improve while the groom gets worse (docs/fur-stage.md),
+// so the trained groom must not lose on the silhouette or the envelope beyond a tolerance, and must
+// gain on at least one signal.
+#include <string>
+
+#include "engine/core/json.hpp"
+#include "engine/fur/fur_trainer.hpp"
+#include "engine/geometry/mesh.hpp"
+#include "engine/io/scene.hpp"
+
+namespace nf::pipeline {
+
+struct FurSettings;
+
+struct GroomSignals {
+  bool held_out = false;  // held-out views were scored
+  double silhouette_iou = 0, orientation_error_deg = 0;
+  double tips_to_envelope_mm = 0, envelope_to_tips_mm = 0;
+  double envelope_mm() const { return 0.5 * (tips_to_envelope_mm + envelope_to_tips_mm); }
+};
+json to_json(const GroomSignals& g);
+
+struct GroomChoiceTolerances {
+  double iou = 0.01;       // held-out silhouette IoU the trained groom may lose
+  double envelope = 0.05;  // share of the envelope chamfer it may add
+  double orientation_deg = 0.25;  // held-out orientation error it may add
+};
+
+struct GroomChoice {
+  bool trained = true;
+  std::string reason;
+};
+// The decision, from the two candidates' signals.
+GroomChoice choose_groom(const GroomSignals& warm, const GroomSignals& trained, const GroomChoiceTolerances& tol = {});
+
+// A candidate's signals: the trainer's field as it is now, rendered into the held-out views at
+// `scored_strands` roots and grown at `envelope_strands` roots against `envelope` (M_NeuS).
+GroomSignals measure_groom(fur::FurTrainer& trainer, const fur::FurTrainingData& data, const io::Scene& scene,
+                           const geometry::Mesh& envelope, const FurSettings& s, double cm);
+
+}  // namespace nf::pipeline
