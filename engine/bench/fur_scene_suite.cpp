@@ -50,10 +50,12 @@ std::vector<std::string> variant_settings(const std::string& variant, const fs::
   if (variant == "truth_knowledge_file") return {"knowledge.file=" + (scene / "gt" / "knowledge.json").string()};
   if (variant == "truth_envelope") return {"neus.mesh=" + (scene / "gt" / "outer.ply").string()};
   if (variant == "truth_all") return {"fur.truth=all"};
+  if (variant == "select_trained") return {"fur.select=trained"};  // the selection off
+  if (variant == "lengths") return {"fur.length_lr=0.01"};         // lengths learned from the photos
   for (const char* loss : {"silhouette", "orientation", "direction", "chamfer", "penetration", "curvature"})
     if (variant == std::string("no_") + loss) return {std::string("fur.") + loss + "_weight=0"};
   throw UsageError("NF_BENCH_FUR_VARIANTS: unknown variant '" + variant +
-                   "' (warm_off, truth_knowledge, truth_knowledge_file, truth_envelope, truth_all, no_silhouette, no_orientation, "
+                   "' (warm_off, truth_knowledge, truth_knowledge_file, truth_envelope, truth_all, select_trained, lengths, no_silhouette, no_orientation, "
                    "no_direction, no_chamfer, no_penetration, no_curvature; join with '+')");
 }
 
@@ -97,7 +99,7 @@ json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
                                                       : std::vector<std::string>{"truth_all", "truth_knowledge", "warm_off", "no_silhouette", "no_orientation",
                                                                                  "no_direction", "no_chamfer", "no_penetration", "no_curvature",
                                                                                  "truth_knowledge_file", "truth_envelope",
-                                                                                 "truth_envelope+truth_knowledge_file"});
+                                                                                 "truth_envelope+truth_knowledge_file", "select_trained", "lengths"});
   for (const std::string& v : variants) variant_settings(v, root);  // unknown names fail before any work
   for (const std::string& p : presets)
     if (p != "draft" && p != "default" && p != "paper") throw UsageError("NF_BENCH_FUR_PRESETS: unknown preset '" + p + "' (draft, default, paper)");
@@ -174,6 +176,8 @@ json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
                      {"image_weight_mean", m["views"]["image_weight_mean"]},
                      {"rendered_fraction_of_photo", m["views"]["rendered_fraction_of_photo"]},
                      {"stages", stage_seconds},
+                     {"selection", m.value("selection", json::object())},
+                     {"lengths", m.value("lengths", json::object())},
                      {"fur_seconds", m.at("seconds")}};
         // The baseline groom on the roots this run used: (a) on the pipeline's, (b) on the truth's.
         const bool true_inputs = std::find(swaps.begin(), swaps.end(), "fur.truth=all") != swaps.end();

@@ -27,7 +27,6 @@ std::atomic<Level>& current() {
 }  // namespace
 
 Level threshold() { return current().load(std::memory_order_relaxed); }
-void set_threshold(Level level) { current().store(level); }
 
 void write(Level level, const std::string& message) {
   static std::mutex mutex;

@@ -8,7 +8,6 @@ namespace nf::log {
 enum class Level { Debug = 0, Info = 1, Warn = 2, Error = 3, Quiet = 4 };
 
 Level threshold();
-void set_threshold(Level level);
 void write(Level level, const std::string& message);
 
 template <class... Args>

@@ -201,6 +201,7 @@ FurTrainer::FurTrainer(gpu::Context& context, const FurTrainingData& data, Stran
   length_raw_.assign(std::size_t(regions), length_factor_raw(1.0, options_.length_bounds));
   length_m_.assign(length_raw_.size(), 0.0), length_v_.assign(length_raw_.size(), 0.0);
   apply_length_factors();
+  start_ = state();
   nn::AdamConfig adam;
   const std::uint64_t count = field_->mlp().parameters().size();
   impl_->adam = std::make_unique<nn::Adam>(context, count, adam, std::vector<nn::ParamGroup>{{0, count, 1.f, options.weight_decay}});

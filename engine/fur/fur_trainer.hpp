@@ -77,8 +77,10 @@ struct FurTrainingOptions {
   bool train_decoder = false;
   // Lengths from the photos (length_factors.hpp): after the warm-up, each region's factor on the
   // knowledge's lengths is optimised with the field by Adam at this learning rate (following the
-  // field's cosine decay; 0: the knowledge's lengths stay), within the bounds.
-  float length_lr = 0.01f;
+  // field's cosine decay), within the bounds. Off by default: the losses that see a length today
+  // pull it one way (the chamfer from M_NeuS asks every strand to reach further; nothing penalises
+  // tips beyond M_NeuS), so on the demo the factors grew to about 1.25 where the truth is 1.
+  float length_lr = 0;
   LengthFactorBounds length_bounds;
   std::uint32_t checkpoint_interval = 100;  // 0: none; about 3 minutes of `default` steps on 2 cores
   unsigned seed = 1;
@@ -163,9 +165,11 @@ class FurTrainer {
   const std::vector<ViewResolution>& view_resolution() const { return resolution_; }  // per training view
   bool any_view_resolves_fur() const { return !image_views_.empty(); }
 
-  // The groom now, and as it was when the warm-up ended (the image steps' starting point; null
-  // before then). set_state returns the field to a state (the stage's selection).
+  // The groom now, at step 0 (the warm start: the 0-step groom), and as it was when the warm-up
+  // ended (the image steps' starting point; null before then). set_state returns the field to a
+  // state (the stage's selection).
   FurFieldState state() const;
+  const FurFieldState& start_state() const { return start_; }
   const FurFieldState* warm_state() const { return warm_ ? &*warm_ : nullptr; }
   void set_state(const FurFieldState& state);
 
@@ -207,6 +211,7 @@ class FurTrainer {
   double seconds_ = 0;
   FurStepReport last_;
   std::vector<FurStepReport> history_;
+  FurFieldState start_;  // a function of the options: made anew, not checkpointed
   std::optional<FurFieldState> warm_;
   // Lengths from the photos: one raw factor per region (regions of the roots), Adam's moments.
   std::vector<double> length_raw_, length_m_, length_v_;

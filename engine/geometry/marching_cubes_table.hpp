@@ -40,7 +40,4 @@ struct MarchingCubesTable {
 // The table, built once on first call (thread-safe).
 const MarchingCubesTable& marching_cubes_table();
 
-// Corner c's offset from the cube's lowest corner.
-inline constexpr std::array<int, 3> mc_corner_offset(int c) { return {c & 1, (c >> 1) & 1, (c >> 2) & 1}; }
-
 }  // namespace nf::geometry

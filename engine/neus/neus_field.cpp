@@ -82,29 +82,6 @@ json to_json(const NeusFieldConfig& c) {
   return j;
 }
 
-NeusFieldConfig neus_field_config_from_json(const json& j) {
-  NeusFieldConfig c;
-  try {
-    const std::string e = j.at("encoding").get<std::string>();
-    if (e == "hash_grid") c.encoding = FieldEncoding::HashGrid;
-    else if (e == "frequency") c.encoding = FieldEncoding::Frequency;
-    else throw InputError("neus field config: encoding must be hash_grid or frequency, got '" + e + "'");
-    const json& h = j.at("hash_grid");
-    c.hash = {h.at("levels").get<std::uint32_t>(), h.at("features").get<std::uint32_t>(),
-              h.at("log2_table").get<std::uint32_t>(), h.at("base_resolution").get<std::uint32_t>(),
-              h.at("max_resolution").get<std::uint32_t>()};
-    c.frequency.frequencies = j.at("frequencies").get<std::uint32_t>();
-    c.sdf_hidden = j.at("sdf_hidden").get<std::vector<std::uint32_t>>();
-    c.features = j.at("features").get<std::uint32_t>();
-    c.colour_hidden = j.at("colour_hidden").get<std::vector<std::uint32_t>>();
-    c.init_radius = j.at("init_radius").get<float>();
-  } catch (const json::exception& ex) {
-    throw InputError(std::string("neus field config: ") + ex.what());
-  }
-  c.validate();
-  return c;
-}
-
 NeusField::NeusField(gpu::Context& context, const NeusFieldConfig& config, unsigned seed)
     : context_(context), config_(config) {
   config_.validate();

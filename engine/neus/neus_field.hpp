@@ -41,7 +41,6 @@ struct NeusFieldConfig {
   void validate() const;  // InputError naming the field
 };
 json to_json(const NeusFieldConfig& c);
-NeusFieldConfig neus_field_config_from_json(const json& j);  // InputError naming the field
 
 class NeusField {
  public:

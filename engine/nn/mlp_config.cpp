@@ -33,12 +33,6 @@ std::uint64_t MlpConfig::parameter_count() const {
   return l.back().bias_offset + l.back().out;
 }
 
-std::uint32_t MlpConfig::max_width() const {
-  std::uint32_t w = std::max(input_dim, output_dim);
-  for (auto h : hidden) w = std::max(w, h);
-  return w;
-}
-
 void MlpConfig::validate() const {
   const auto check_dim = [](std::uint32_t v, const std::string& field) {
     if (v < 1 || v > kMaxWidth)

@@ -45,7 +45,6 @@ struct MlpConfig {
 
   std::vector<LayerShape> layers() const;
   std::uint64_t parameter_count() const;
-  std::uint32_t max_width() const;
   // Throws InputError naming the field: dims 1..1024, hidden widths 1..kMaxWidth, finite beta/omega.
   void validate() const;
 };

@@ -1,15 +1,15 @@
 #pragma once
-// Never worse than the warm start: the fur stage keeps the groom its image steps made only where
-// the data it has says they helped. Two candidates: the field when the warm-up ended (the knowledge,
-// M_bald and M_NeuS alone) and the trained field. Each is measured on what the stage has without a
-// ground truth:
+// Never worse than the warm start: the fur stage keeps what its steps made only where the data it
+// has says they helped. The candidates, in order: the 0-step groom (the warm start), the field when
+// the warm-up ended (the knowledge, M_bald and M_NeuS alone) and the trained field; each replaces
+// the one kept so far only when choose_groom says so. Each is measured on what the stage has
+// without a ground truth:
 //   - the held-out views: silhouette IoU and the reliability-weighted orientation error;
 //   - M_NeuS, the envelope of the fur: the two-way chamfer between the strands' tips and M_NeuS
 //     (tips far outside it are fur where the photos show none; M_NeuS far from every tip is fur
 //     that does not reach where they show some).
 // The held-out orientation error alone can improve while the groom gets worse (docs/fur-stage.md),
-// so the trained groom must not lose on the silhouette or the envelope beyond a tolerance, and must
-// gain on at least one signal.
+// so a later groom must not lose on any signal beyond a tolerance, and must gain on at least one.
 #include <string>
 
 #include "engine/core/json.hpp"
@@ -39,7 +39,7 @@ struct GroomChoice {
   bool trained = true;
   std::string reason;
 };
-// The decision, from the two candidates' signals.
+// Whether `trained` (the later candidate) replaces `warm` (the one kept so far).
 GroomChoice choose_groom(const GroomSignals& warm, const GroomSignals& trained, const GroomChoiceTolerances& tol = {});
 
 // A candidate's signals: the trainer's field as it is now, rendered into the held-out views at

@@ -316,17 +316,18 @@ void train(StageContext& c, const FurSettings& s, const FurInputs& in, std::uniq
   progress.finish();
 }
 
-// Which groom to keep (fur_selection.hpp); leaves the trainer's field at it. Returns the record.
+// Which groom to keep (fur_selection.hpp): the 0-step groom, the warm-up's, the trained one, each
+// later one only where it beats the one kept so far. Leaves the trainer's field at the choice.
 json select_groom(StageContext& c, const FurSettings& s, const FurInputs& in, fur::FurTrainer& trainer, const FurGroundTruth& gt) {
   const fur::FurFieldState* warm = trainer.warm_state();
-  if (s.select == "trained" || !warm || warm->step == trainer.step()) return {{"kept", "trained"}, {"reason", s.select == "trained" ? "fur.select=trained" : "no image step ran"}};
-  if (s.select == "warm") {
+  if (s.select == "trained") return {{"kept", "trained"}, {"reason", "fur.select=trained"}};
+  if (s.select == "warm" && warm) {
     trainer.set_state(*warm);
     return {{"kept", "warm-up"}, {"reason", "fur.select=warm"}};
   }
-  const fur::FurFieldState trained = trainer.state();
   // Each candidate's signals and, on synth scenes, its scores against the truth (for the docs).
-  const auto measure = [&](json& record) {
+  const auto measure = [&](const fur::FurFieldState& state, json& record) {
+    trainer.set_state(state);
     const GroomSignals g = measure_groom(trainer, in.data, c.scene, *in.envelope, s, in.cm);
     record = to_json(g);
     if (gt.sample) {
@@ -336,15 +337,29 @@ json select_groom(StageContext& c, const FurSettings& s, const FurInputs& in, fu
     }
     return g;
   };
+  const fur::FurFieldState trained = trainer.state();
+  std::vector<std::pair<const char*, const fur::FurFieldState*>> candidates{{"0-step", &trainer.start_state()}};
+  if (warm && warm->step > 0) candidates.push_back({"warm-up", warm});
+  if (trained.step > (warm ? warm->step : 0)) candidates.push_back({"trained", &trained});
   json record;
-  const GroomSignals t_signals = measure(record["trained"]);
-  trainer.set_state(*warm);
-  const GroomSignals w_signals = measure(record["warm"]);
-  const GroomChoice choice = choose_groom(w_signals, t_signals);
-  if (choice.trained) trainer.set_state(trained);
-  record["kept"] = choice.trained ? "trained" : "warm-up";
-  record["reason"] = choice.reason;
-  log::info("fur: keeping the ", choice.trained ? "trained groom" : "warm-up's groom (the knowledge, M_bald and M_NeuS alone)", ": ", choice.reason);
+  const fur::FurFieldState* kept = nullptr;
+  const char* kept_name = "";
+  GroomSignals kept_signals;
+  std::string reason;
+  for (const auto& [name, state] : candidates) {
+    const GroomSignals g = measure(*state, record[name]);
+    if (!kept) {
+      kept = state, kept_name = name, kept_signals = g;
+      continue;
+    }
+    const GroomChoice choice = choose_groom(kept_signals, g);
+    record[name]["against"] = kept_name, record[name]["kept"] = choice.trained, record[name]["reason"] = choice.reason;
+    if (choice.trained) kept = state, kept_name = name, kept_signals = g, reason = choice.reason;
+  }
+  trainer.set_state(*kept);
+  record["kept"] = kept_name;
+  record["reason"] = reason.empty() ? "no later groom gained on the held-out views or M_NeuS" : reason;
+  log::info("fur: keeping the ", kept_name, " groom: ", record["reason"].get<std::string>());
   return record;
 }
 
@@ -583,7 +598,7 @@ const SettingsSchema<FurSettings>& fur_settings() {
         .add("length_min", [](F& f) -> auto& { return f.training.length_bounds.lo; }, 0.01, 1, "the smallest length factor")
         .add("length_max", [](F& f) -> auto& { return f.training.length_bounds.hi; }, 1, 100, "the largest length factor")
         .text("select", [](F& f) -> auto& { return f.select; }, {"auto", "trained", "warm"},
-              "the groom kept: auto (the trained one where the held-out views and M_NeuS say the image steps helped), trained, or warm (the warm-up's)")
+              "the groom kept: auto (0-step, warm-up or trained, a later one where the held-out views and M_NeuS say it helped), trained, or warm (the warm-up's)")
         .text("truth", [](F& f) -> auto& { return f.truth; }, {"none", "knowledge", "all"},
               "synth scenes: train on the true knowledge (knowledge) or the true bald body, knowledge and roots (all), to measure what the earlier stages' errors cost")
         .check([](const F& f) { f.training.validate(); });

@@ -45,9 +45,9 @@ struct FurSettings {
   // errors cost: "knowledge" (the true lengths and directions on the pipeline's M_bald), "all" (the
   // true bald body, knowledge and roots; its baseline groom is the baseline (b)).
   std::string truth = "none";
-  // Which groom is kept (fur_selection.hpp): "auto" the trained one only where the held-out views
-  // and M_NeuS say the image steps helped, and only the warm-up where no photo resolves the fur;
-  // "trained" always; "warm" the warm-up's.
+  // Which groom is kept (fur_selection.hpp): "auto" the 0-step, warm-up or trained groom, a later
+  // one only where the held-out views and M_NeuS say it helped (and training stops after the
+  // warm-up where no photo resolves the fur); "trained" always; "warm" the warm-up's.
   std::string select = "auto";
 };
 FurSettings fur_quality_preset(const std::string& quality);

@@ -25,7 +25,6 @@ std::vector<std::unique_ptr<Stage>> reconstruction_stages() {
   stages.push_back(std::make_unique<FramesStage>());
   stages.push_back(std::make_unique<FurStage>());
   stages.push_back(std::make_unique<ExportStage>());
-  // Next, as it lands: export.
   return stages;
 }
 

@@ -363,10 +363,22 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   CHECK(nf::io::read_hair(work / "fur" / "strands.hair").strand_count() == 2500);
   const nf::json& fur_summary = five[5]["summary"];
   CHECK(fur_summary["strands"] == 2500);
-  CHECK(fur_summary["steps"] == 12);
   CHECK(fur_summary["skipped_steps"] == 0);
   // Photos of 64 px: the fur spans under a pixel (about half of the 128 px cat's 1.3), so no view's
-  // image losses run, and the log says so.
+  // image losses run, the log says so, and training stops after the 4 warm-up steps of the 12 (the
+  // groom the knowledge, M_bald and M_NeuS give; fur.select=trained would run them all).
+  CHECK(fur_summary["steps"] == 4);
+  CHECK(framed.output.find("training stops after the 4 warm-up steps") != std::string::npos);
+  // The selection weighs the 0-step groom against the warm-up's (no image step ran).
+  CHECK((fur_summary["selection"]["kept"] == "0-step" || fur_summary["selection"]["kept"] == "warm-up"));
+  CHECK(fur_summary["selection"].contains("0-step"));
+  CHECK(fur_summary["selection"]["warm-up"]["against"] == "0-step");
+  CHECK_FALSE(fur_summary["selection"].contains("trained"));
+  // The length factors: one per region with roots, 1 where no step learned them, and the scale
+  // they imply beside the knowledge's.
+  REQUIRE(fur_summary["lengths"]["regions"].contains("body"));
+  CHECK(fur_summary["lengths"]["regions"]["body"]["factor"].get<double>() == 1.0);
+  CHECK(fur_summary["lengths"]["cm_per_unit_implied"].get<double>() == doctest::Approx(fur_summary["lengths"]["cm_per_unit_eyes"].get<double>()));
   CHECK(fur_summary["views"]["fur_pixels_median"].get<double>() > 0.2);
   CHECK(fur_summary["views"]["fur_pixels_median"].get<double>() < 1.5);
   CHECK(fur_summary["views"]["image_weight_mean"].get<double>() == 0.0);
@@ -479,10 +491,11 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
     CHECK(wrong.output.find("joints: ") != std::string::npos);
   }
   // The fur stage on the scene's truth (the bench's baseline (b) and ablations) with its curve of
-  // scores against training time.
+  // scores against training time, over all 12 steps (select=trained: no 64 px photo resolves the
+  // fur, so auto would stop after the warm-up).
   {
     const Result truthful = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + body + " --set knowledge.preset=cat" +
-                                small + " --set fur.truth=all --set fur.curve_seconds=0.01 --to fur --json");
+                                small + " --set fur.truth=all --set fur.curve_seconds=0.01 --set fur.select=trained --to fur --json");
     INFO(truthful.output);
     REQUIRE(truthful.code == 0);
     const nf::json runs = nf::json::parse(truthful.output.substr(truthful.output.find('[')));

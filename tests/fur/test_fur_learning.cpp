@@ -11,6 +11,8 @@
 // the image losses forced on.
 #include <doctest/doctest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -62,6 +64,7 @@ TEST_CASE("fur learning: strands lifted too far come back onto the fur, and phot
   FurTrainingOptions o;
   o.steps = 150, o.strands = 2500, o.warm_steps = 20, o.checkpoint_interval = 0, o.chamfer_queries = 3000;
   o.lying_angle_deg = 60;
+  o.length_lr = 0.01f;  // lengths learned after the warm-up (off by default)
   std::unique_ptr<StrandPrior> prior = shipped_strand_prior(ctx);
   FurTrainer trainer(ctx, in.data, *prior, {}, o);
   // The fur spans about 1.3 photo pixels in every view (1.32 measured), below half of the
@@ -76,7 +79,16 @@ TEST_CASE("fur learning: strands lifted too far come back onto the fur, and phot
   CHECK(image_loss_weight(3.6, 4.8) == doctest::Approx(0.5));
   CHECK(image_loss_weight(4.8, 4.8) == 1.0);
   CHECK(image_loss_weight(0.1, 0.0) == 1.0);
+  CHECK(trainer.warm_state() == nullptr);
   trainer.train(o.warm_steps);
+  // The warm-up's field is kept (the stage's selection returns to it): this field, lengths at 1.
+  REQUIRE(trainer.warm_state() != nullptr);
+  CHECK(trainer.warm_state()->step == o.warm_steps);
+  CHECK(trainer.warm_state()->parameters == trainer.field().parameters());
+  for (float f : trainer.warm_state()->length_factors) CHECK(f == doctest::Approx(1.0f).epsilon(1e-6));
+  // And the 0-step groom (the warm start) it began from.
+  CHECK(trainer.start_state().step == 0);
+  CHECK(trainer.start_state().parameters != trainer.warm_state()->parameters);
   const double iou_before = held_out_iou(trainer, in.data);
   {
     // Given strands render like the field's: its own strands at the same roots score the same
@@ -136,6 +148,10 @@ TEST_CASE("fur learning: strands lifted too far come back onto the fur, and phot
     CHECK(a.silhouette == 0.0);
     CHECK(a.loss == doctest::Approx(b.loss).epsilon(1e-6));
     CHECK(a.chamfer == doctest::Approx(b.chamfer).epsilon(1e-6));
+    // The length factors and the warm-up's field come back with the checkpoint.
+    CHECK(resumed.field().length_factors() == trainer.field().length_factors());
+    REQUIRE(resumed.warm_state() != nullptr);
+    CHECK(resumed.warm_state()->parameters == trainer.warm_state()->parameters);
   }
 
   const FurStepReport last = trainer.train(o.steps);
@@ -146,6 +162,23 @@ TEST_CASE("fur learning: strands lifted too far come back onto the fur, and phot
   CHECK_FALSE(last.image);  // no view resolves the fur
   CHECK(last.chamfer > 0);  // the geometric losses of the image phase still run
   const auto [f_groom, f_groom_mm] = scores(trainer);
+  // The lengths learned after the warm-up (from the chamfer here) moved, within their bounds.
+  double moved = 0;
+  for (float f : trainer.field().length_factors()) {
+    CHECK(f >= o.length_bounds.lo);
+    CHECK(f <= o.length_bounds.hi);
+    moved = std::max(moved, std::abs(double(f) - 1.0));
+  }
+  CHECK(moved > 1e-3);
+  // set_state returns to the warm-up's groom: the same strands as then.
+  {
+    const FurFieldState trained = trainer.state();
+    trainer.set_state(*trainer.warm_state());
+    const auto [f_back, f_back_mm] = scores(trainer);
+    CHECK(f_back == doctest::Approx(f_warm).epsilon(1e-9));
+    CHECK(f_back_mm == doctest::Approx(f_warm_mm).epsilon(1e-9));
+    trainer.set_state(trained);
+  }
 
   // The same run with the image losses forced on (every view weighs fully, as before the weighting).
   FurTrainingOptions forced = o;
