@@ -37,10 +37,10 @@ GroomChoice choose_groom(const GroomSignals& warm, const GroomSignals& trained, 
                                trained.orientation_error_deg < warm.orientation_error_deg - tol.orientation_deg));
   if (!gains) return {false, "the image steps gained on no signal beyond its tolerance"};
   if (held)
-    std::snprintf(why, sizeof why, "held-out IoU %.3f (warm-up %.3f), orientation %.2f deg (%.2f), M_NeuS chamfer %.2f mm (%.2f)",
+    std::snprintf(why, sizeof why, "held-out IoU %.3f (against %.3f), orientation %.2f deg (%.2f), M_NeuS chamfer %.2f mm (%.2f)",
                   trained.silhouette_iou, warm.silhouette_iou, trained.orientation_error_deg, warm.orientation_error_deg, env_t, env_w);
   else
-    std::snprintf(why, sizeof why, "M_NeuS chamfer %.2f mm (warm-up %.2f); no held-out view", env_t, env_w);
+    std::snprintf(why, sizeof why, "M_NeuS chamfer %.2f mm (against %.2f); no held-out view", env_t, env_w);
   return {true, why};
 }
 
