@@ -314,7 +314,9 @@ FurStepReport FurTrainer::train_step() {
   stream.submit_and_wait();
   passes["field_backward_and_adam"] = t.seconds();
   // The lengths learn from the losses that see them: the image losses and the chamfer to M_NeuS.
-  if (!r.warm && options_.length_lr > 0 && !length_raw_.empty()) learn_lengths(ids, float(options_.length_lr * r.lr / options_.lr));
+  r.length_factor_mean = last_.length_factor_mean;  // the factors change only where they learn
+  if (!r.warm && options_.length_lr > 0 && !length_raw_.empty())
+    r.length_factor_mean = learn_lengths(ids, float(options_.length_lr * r.lr / options_.lr));
 
   // The losses of this step (without the loss weights; the image losses with the view's image
   // weight and reliability, as they enter the loss), the optimiser's counters.
@@ -333,11 +335,6 @@ FurStepReport FurTrainer::train_step() {
   r.loss = fw.direction * r.direction + fw.penetration * r.penetration / radius +
            (r.warm ? 0.0 : fw.curvature * r.curvature + fw.silhouette * r.silhouette + fw.orientation * r.orientation +
                                fw.chamfer * r.chamfer / (radius * radius));
-  {
-    double log_sum = 0;
-    for (std::uint32_t id : ids) log_sum += std::log(double(length_factor(field_->length_factors(), data_.roots.region[id])));
-    r.length_factor_mean = std::exp(log_sum / double(std::max<std::size_t>(1, ids.size())));
-  }
   const nn::Adam::Counters counters = m.adam->counters();
   r.grad_norm = counters.last_norm;
   r.skipped_steps = counters.skipped;
@@ -350,7 +347,7 @@ FurStepReport FurTrainer::train_step() {
   return r;
 }
 
-void FurTrainer::learn_lengths(const std::vector<std::uint32_t>& ids, float lr) {
+double FurTrainer::learn_lengths(const std::vector<std::uint32_t>& ids, float lr) {
   const std::vector<float> grad_frames = impl_->batch.grad_frames.download(0, std::uint64_t(ids.size()) * kFrameFloats);
   std::vector<std::int32_t> region(ids.size());
   std::vector<float> base(ids.size());
@@ -368,6 +365,13 @@ void FurTrainer::learn_lengths(const std::vector<std::uint32_t>& ids, float lr) 
     length_raw_[r] -= lr * (length_m_[r] / c1) / (std::sqrt(length_v_[r] / c2) + eps);
   }
   apply_length_factors();
+  // The factors' geometric mean over the batch's strands, from its count per region.
+  std::vector<std::size_t> count(length_raw_.size(), 0);
+  for (std::int32_t r : region)
+    if (r >= 0 && std::size_t(r) < count.size()) ++count[std::size_t(r)];
+  double log_sum = 0;
+  for (std::size_t r = 0; r < count.size(); ++r) log_sum += double(count[r]) * std::log(double(field_->length_factors()[r]));
+  return std::exp(log_sum / double(std::max<std::size_t>(1, ids.size())));
 }
 
 void FurTrainer::apply_length_factors() {

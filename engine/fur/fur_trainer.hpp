@@ -106,7 +106,7 @@ struct FurStepReport {
   bool image = false;      // the image losses ran (after the warm-up, on a view that resolves the fur)
   double loss = 0, silhouette = 0, orientation = 0, direction = 0, chamfer = 0, penetration = 0, curvature = 0;
   std::uint64_t chamfer_unmatched = 0;
-  double length_factor_mean = 1;  // the length factors' geometric mean over the roots
+  double length_factor_mean = 1;  // the length factors' geometric mean over the step's strands
   float lr = 0, grad_norm = 0;
   std::uint32_t skipped_steps = 0;
   double seconds = 0;  // training time so far
@@ -193,7 +193,7 @@ class FurTrainer {
  private:
   struct Impl;
   FurStepReport train_step();
-  void learn_lengths(const std::vector<std::uint32_t>& ids, float lr);
+  double learn_lengths(const std::vector<std::uint32_t>& ids, float lr);  // one Adam step; the batch's mean factor
   // The rasteriser's 5 planes of `strands` strands in `view`; `reach`: how far a strand reaches
   // from its root (the depth range's margin).
   std::vector<float> rasterize(const FurView& view, gpu::BufferRange points, gpu::BufferRange confidence, std::uint32_t strands,

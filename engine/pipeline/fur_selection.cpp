@@ -2,7 +2,6 @@
 
 #include <cstdio>
 
-#include "engine/metrics/strand_metrics.hpp"
 #include "engine/metrics/surface_metrics.hpp"
 #include "engine/pipeline/fur_evaluation.hpp"
 #include "engine/pipeline/fur_stage.hpp"
@@ -45,16 +44,18 @@ GroomChoice choose_groom(const GroomSignals& warm, const GroomSignals& trained, 
 }
 
 GroomSignals measure_groom(fur::FurTrainer& trainer, const fur::FurTrainingData& data, const io::Scene& scene, const geometry::Mesh& envelope,
-                           const FurSettings& s, double cm) {
+                           const FurSettings& s, double cm, metrics::StrandSample* grown) {
   GroomSignals g;
   if (!data.held_out.empty()) {
     const std::uint32_t scored = s.score_strands ? s.score_strands : s.training.strands;
     const HeldOutScores h = score_field_held_out(trainer, data.held_out, scene, scored, s.training.seed + 7, nullptr);
     g.held_out = true, g.silhouette_iou = h.silhouette_iou, g.orientation_error_deg = h.orientation_error_deg;
   }
-  const io::StrandSet strands = field_strands(trainer, data.roots, s.metric_strands, s.training.seed + 17);
-  const metrics::TipChamfer tips = metrics::tip_chamfer(metrics::sample_strands(strands, s.metric_strands, s.metric_points, 1), envelope, cm);
+  metrics::StrandSample sample =
+      metrics::sample_strands(field_strands(trainer, data.roots, s.metric_strands, s.training.seed + 17), s.metric_strands, s.metric_points, 1);
+  const metrics::TipChamfer tips = metrics::tip_chamfer(sample, envelope, cm);
   g.tips_to_envelope_mm = tips.tips_to_surface_mm, g.envelope_to_tips_mm = tips.surface_to_tips_mm;
+  if (grown) *grown = std::move(sample);
   return g;
 }
 

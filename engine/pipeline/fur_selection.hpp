@@ -16,6 +16,7 @@
 #include "engine/fur/fur_trainer.hpp"
 #include "engine/geometry/mesh.hpp"
 #include "engine/io/scene.hpp"
+#include "engine/metrics/strand_metrics.hpp"
 
 namespace nf::pipeline {
 
@@ -42,9 +43,10 @@ struct GroomChoice {
 // Whether `trained` (the later candidate) replaces `warm` (the one kept so far).
 GroomChoice choose_groom(const GroomSignals& warm, const GroomSignals& trained, const GroomChoiceTolerances& tol = {});
 
-// A candidate's signals: the trainer's field as it is now, rendered into the held-out views at
-// `scored_strands` roots and grown at `envelope_strands` roots against `envelope` (M_NeuS).
+// A candidate's signals: the trainer's field as it is now, rendered into the held-out views at the
+// scored strands' count and grown at metric_strands roots against `envelope` (M_NeuS); `grown`,
+// when given, receives that sample of the strands (for scores against a ground truth).
 GroomSignals measure_groom(fur::FurTrainer& trainer, const fur::FurTrainingData& data, const io::Scene& scene,
-                           const geometry::Mesh& envelope, const FurSettings& s, double cm);
+                           const geometry::Mesh& envelope, const FurSettings& s, double cm, metrics::StrandSample* grown = nullptr);
 
 }  // namespace nf::pipeline

@@ -281,10 +281,12 @@ std::uint32_t steps_to_train(const FurSettings& s, const fur::FurTrainer& traine
 }
 
 // Trains (resuming from `checkpoint` when it fits), with the curve; Interrupted saves a checkpoint.
-void train(StageContext& c, const FurSettings& s, const FurInputs& in, std::unique_ptr<fur::StrandPrior>& prior,
+// Returns how well the photos resolve the fur (log_fur_resolution), said before training.
+json train(StageContext& c, const FurSettings& s, const FurInputs& in, std::unique_ptr<fur::StrandPrior>& prior,
            std::unique_ptr<fur::FurTrainer>& trainer, FurCurve& curve, const fs::path& checkpoint) {
   auto make_trainer = [&] { return std::make_unique<fur::FurTrainer>(c.gpu, in.data, *prior, s.field, s.training); };
   trainer = make_trainer();
+  const json resolution = log_fur_resolution(trainer->view_resolution(), s.training.resolved_fur_px);
   const bool resumed = resume_or_discard("fur", checkpoint, [&] { return trainer->load_checkpoint(checkpoint); },
                                          [&] {
                                            prior = fur::shipped_strand_prior(c.gpu);
@@ -314,6 +316,7 @@ void train(StageContext& c, const FurSettings& s, const FurInputs& in, std::uniq
                       checkpoint.string());
   }
   progress.finish();
+  return resolution;
 }
 
 // Which groom to keep (fur_selection.hpp): the 0-step groom, the warm-up's, the trained one, each
@@ -321,20 +324,18 @@ void train(StageContext& c, const FurSettings& s, const FurInputs& in, std::uniq
 json select_groom(StageContext& c, const FurSettings& s, const FurInputs& in, fur::FurTrainer& trainer, const FurGroundTruth& gt) {
   const fur::FurFieldState* warm = trainer.warm_state();
   if (s.select == "trained") return {{"kept", "trained"}, {"reason", "fur.select=trained"}};
-  if (s.select == "warm" && warm) {
+  if (s.select == "warm") {
+    if (!warm) return {{"kept", "trained"}, {"reason", "fur.select=warm, but training ended before the warm-up did"}};
     trainer.set_state(*warm);
     return {{"kept", "warm-up"}, {"reason", "fur.select=warm"}};
   }
   // Each candidate's signals and, on synth scenes, its scores against the truth (for the docs).
   const auto measure = [&](const fur::FurFieldState& state, json& record) {
     trainer.set_state(state);
-    const GroomSignals g = measure_groom(trainer, in.data, c.scene, *in.envelope, s, in.cm);
+    metrics::StrandSample grown;
+    const GroomSignals g = measure_groom(trainer, in.data, c.scene, *in.envelope, s, in.cm, &grown);
     record = to_json(g);
-    if (gt.sample) {
-      const io::StrandSet strands = field_strands(trainer, in.data.roots, s.metric_strands, s.training.seed + 17);
-      const json scores = metrics::groom_scores(metrics::sample_strands(strands, s.metric_strands, s.metric_points, 1), gt.truth(), in.cm);
-      if (scores.contains("fscore")) record["fscore"] = scores["fscore"];
-    }
+    if (gt.sample) record["fscore"] = metrics::groom_scores(grown, {gt.truth().strands, nullptr}, in.cm)["fscore"];
     return g;
   };
   const fur::FurFieldState trained = trainer.state();
@@ -451,10 +452,9 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
   std::unique_ptr<fur::FurTrainer> trainer;
   const fs::path checkpoint = resume / "checkpoint.nfwt";
   FurCurve curve(s, resume / "curve.jsonl", gt, in.cm);
-  train(c, s, in, prior, trainer, curve, checkpoint);
+  const json resolution = train(c, s, in, prior, trainer, curve, checkpoint);
   curve.finish(*trainer, in.data, c.scene, out.curve());
   seconds["train"] = t.seconds();
-  const json resolution = log_fur_resolution(trainer->view_resolution(), s.training.resolved_fur_px);
   for (const char* key : {"fur_pixels_median", "image_weight_mean", "views_without_image_losses"}) views[key] = resolution[key];
   // After training, Ctrl-C or a kill stops at the next chunk of work with the trained state saved:
   // the same command then resumes at the last step and only redoes what follows.
@@ -518,7 +518,6 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
   seconds["previews"] = t.seconds();
 
   const fur::FurStepReport last = trainer->last_report();
-  const knowledge::Knowledge knowledge = knowledge::read_knowledge(knowledge_outputs(c.work).knowledge());
   json summary{{"strands", n},
                {"roots_file", groom.own_roots ? "fur/roots.npz" : "frames/roots.npz"},
                {"steps", trainer->step()},
@@ -537,7 +536,6 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
                {"seconds", seconds},
                {"seconds_per_step", trainer->step() ? last.seconds / trainer->step() : 0.0},
                {"peak_device_bytes", c.gpu.peak_allocated_bytes()}};
-  summary["lengths"]["cm_per_unit_eyes"] = in.cm;  // the knowledge stage's scale (eyes, scene file or --scene-scale)
   if (!gt.info.is_null()) summary["ground_truth"] = gt.info;
   if (in.swapped) summary["truth"] = s.truth;
   if (curve.enabled()) summary["curve"] = curve.points();

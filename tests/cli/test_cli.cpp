@@ -378,7 +378,8 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   // they imply beside the knowledge's.
   REQUIRE(fur_summary["lengths"]["regions"].contains("body"));
   CHECK(fur_summary["lengths"]["regions"]["body"]["factor"].get<double>() == 1.0);
-  CHECK(fur_summary["lengths"]["cm_per_unit_implied"].get<double>() == doctest::Approx(fur_summary["lengths"]["cm_per_unit_eyes"].get<double>()));
+  CHECK(fur_summary["lengths"]["cm_per_unit_implied"].get<double>() == doctest::Approx(fur_summary["lengths"]["cm_per_unit_used"].get<double>()));
+  CHECK(fur_summary["lengths"]["cm_per_unit_used"].get<double>() == doctest::Approx(nf::json::parse(std::ifstream(work / "fur" / "scale.json"))["cm_per_unit"].get<double>()));
   CHECK(fur_summary["views"]["fur_pixels_median"].get<double>() > 0.2);
   CHECK(fur_summary["views"]["fur_pixels_median"].get<double>() < 1.5);
   CHECK(fur_summary["views"]["image_weight_mean"].get<double>() == 0.0);
