@@ -52,10 +52,11 @@ std::vector<std::string> variant_settings(const std::string& variant, const fs::
   if (variant == "truth_all") return {"fur.truth=all"};
   if (variant == "select_trained") return {"fur.select=trained"};  // the selection off
   if (variant == "lengths") return {"fur.length_lr=0.01"};         // lengths learned from the photos
+  if (variant == "patches_off") return {"fur.patch=0"};             // whole views at fur.resolution
   for (const char* loss : {"silhouette", "orientation", "direction", "chamfer", "penetration", "curvature"})
     if (variant == std::string("no_") + loss) return {std::string("fur.") + loss + "_weight=0"};
   throw UsageError("NF_BENCH_FUR_VARIANTS: unknown variant '" + variant +
-                   "' (warm_off, truth_knowledge, truth_knowledge_file, truth_envelope, truth_all, select_trained, lengths, no_silhouette, no_orientation, "
+                   "' (warm_off, truth_knowledge, truth_knowledge_file, truth_envelope, truth_all, select_trained, lengths, patches_off, no_silhouette, no_orientation, "
                    "no_direction, no_chamfer, no_penetration, no_curvature; join with '+')");
 }
 
@@ -99,7 +100,7 @@ json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
                                                       : std::vector<std::string>{"truth_all", "truth_knowledge", "warm_off", "no_silhouette", "no_orientation",
                                                                                  "no_direction", "no_chamfer", "no_penetration", "no_curvature",
                                                                                  "truth_knowledge_file", "truth_envelope",
-                                                                                 "truth_envelope+truth_knowledge_file", "select_trained", "lengths"});
+                                                                                 "truth_envelope+truth_knowledge_file", "select_trained", "lengths", "patches_off"});
   for (const std::string& v : variants) variant_settings(v, root);  // unknown names fail before any work
   for (const std::string& p : presets)
     if (p != "draft" && p != "default" && p != "paper") throw UsageError("NF_BENCH_FUR_PRESETS: unknown preset '" + p + "' (draft, default, paper)");
@@ -111,14 +112,26 @@ json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
   if (const auto names = synth::world_frame_names(); std::find(names.begin(), names.end(), frame) == names.end())
     throw UsageError("NF_BENCH_FUR_FRAME: unknown frame '" + frame + "' (" + join(names) + ")");
 
+  // NF_BENCH_FUR_RESOLUTIONS: the photos' sizes (longer side; default 512, 128 with --quick); a
+  // scene of another size than 512 is named after it (cat-1024).
+  std::vector<std::uint32_t> resolutions;
+  for (const std::string& r : env_list("NF_BENCH_FUR_RESOLUTIONS", {options.quick ? "128" : "512"})) {
+    char* end = nullptr;
+    const unsigned long v = std::strtoul(r.c_str(), &end, 10);
+    if (r.empty() || *end || v < 64 || v > 8192) throw UsageError("NF_BENCH_FUR_RESOLUTIONS: '" + r + "' is not a photo size in [64, 8192]");
+    resolutions.push_back(std::uint32_t(v));
+  }
+
   json records = json::array();
+  for (const std::uint32_t resolution : resolutions)
   for (const std::string& animal : animals) {
-    const std::string named = frame == "y-up-m" ? animal : animal + "-" + frame;
+    const bool sized = resolution != (options.quick ? 128u : 512u);
+    const std::string named = (frame == "y-up-m" ? animal : animal + "-" + frame) + (sized ? "-" + std::to_string(resolution) : "");
     const fs::path scene = root / named, work = root / (named + "-work");
     synth::SynthOptions so;
     so.animal = animal, so.seed = 1, so.frame = frame;
     so.views = options.quick ? 12 : 36;
-    so.resolution = options.quick ? 128 : 512;
+    so.resolution = resolution;
     so.strands = options.quick ? 20000 : 100000;
     if (!fs::exists(scene / "gt" / "scene.json")) synth::synthesize_scene(scene, so);
     const json scene_params{{"animal", animal}, {"frame", frame}, {"views", so.views}, {"resolution", so.resolution}, {"gt_strands", so.strands}};

@@ -26,4 +26,11 @@ double image_loss_weight(double fur_pixels, double resolved_px) {
   return std::clamp(2 * fur_pixels / resolved_px - 1, 0.0, 1.0);
 }
 
+std::uint32_t gabor_scales_for(double fur_pixels, double resolved_px, std::uint32_t most) {
+  std::uint32_t scales = 1;
+  const double needed = 2 * std::max(resolved_px, 1.0);
+  while (scales < most && fur_pixels / double(1u << scales) >= needed) ++scales;
+  return std::max(1u, std::min(scales, most));
+}
+
 }  // namespace nf::fur

@@ -28,4 +28,13 @@ double fur_length_pixels(const FurView& view, const Roots& roots, std::size_t sa
 
 double image_loss_weight(double fur_pixels, double resolved_px);
 
+// How many Gabor scales (orientation_scales.hpp: the photo and its halvings) a view's native
+// targets use, at most `most`: a halving only while the fur still spans 2 x resolved_px pixels in
+// the halved photo. The Gabor bank fits strand texture a few pixels wide; strands are as wide as
+// the photo is large, so a 2048 px photo of fur that spans 35 px needs the halved photo's map
+// where a 1024 px one (17.5 px) does not, and a coarser map of unresolved fur (the demo's 2.9 px)
+// reads the body's shading as coherent orientation (on the demo: 48 % of the fur's pixels took the
+// halved map and the trained groom fell from 94.2 with one map to 82.4 at F(2 cm, 20°); docs/fur-stage.md).
+std::uint32_t gabor_scales_for(double fur_pixels, double resolved_px, std::uint32_t most);
+
 }  // namespace nf::fur

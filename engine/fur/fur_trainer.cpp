@@ -145,8 +145,9 @@ struct FurTrainer::Impl {
         queries(c, std::max<std::uint64_t>(1, chamfer_queries) * 3, "chamfer queries"),
         losses(c, 4, "fur image losses") {
     std::uint64_t most = 1;
-    for (const auto* views : {&d.train, &d.held_out})
+    for (const auto* views : {&d.train, &d.held_out, &d.held_out_patches})
       for (const FurView& v : *views) most = std::max(most, v.pixels());
+    if (d.patches) most = std::max(most, std::uint64_t(d.patches->patch_size()) * d.patches->patch_size());
     for (auto* b : {&image, &grad_image}) b->reset(new gpu::Buffer<float>(c, most * splat::kChannels, "fur image"));
     for (auto* b : {&mask, &weight, &angle, &confidence, &depth}) b->reset(new gpu::Buffer<float>(c, most, "fur view target"));
     grid.dims = {d.bald_sdf.grid.dims.x, d.bald_sdf.grid.dims.y, d.bald_sdf.grid.dims.z};
@@ -249,14 +250,23 @@ FurStepReport FurTrainer::train_step() {
   const splat::StrandShape shape{m.batch.strands, kStrandPoints};
   const double radius = data_.scene_radius;
   const FurView* view = nullptr;
+  FurView patch;      // the step's native-resolution patch (with patches)
   double weight = 0;  // the view's image weight
   if (!r.warm && !image_views_.empty()) {
     std::mt19937_64 rng(seed ^ 0x5bd1e995ull);
     r.view = image_views_[std::uniform_int_distribution<std::size_t>(0, image_views_.size() - 1)(rng)];
-    view = &data_.train[r.view];
     weight = resolution_[r.view].image_weight;
     t.restart();
-    if (m.uploaded_view != r.view) m.upload_view(*view), m.uploaded_view = r.view;
+    if (data_.patches) {
+      patch = data_.patches->cut(r.view, data_.patches->place(r.view, rng()));
+      view = &patch;
+      m.upload_view(patch), m.uploaded_view = ~0u;
+      passes["patch"] = t.seconds();
+      t.restart();
+    } else {
+      view = &data_.train[r.view];
+      if (m.uploaded_view != r.view) m.upload_view(*view), m.uploaded_view = r.view;
+    }
     const std::uint64_t px = view->pixels();
     const auto [near, far] = depth_range(*view, double(*std::max_element(lengths.begin(), lengths.end())));
     splat::RasterParams params;

@@ -27,6 +27,7 @@
 #include "engine/core/json.hpp"
 #include "engine/defur/sdf_file.hpp"
 #include "engine/fur/fur_field.hpp"
+#include "engine/fur/fur_patches.hpp"
 #include "engine/fur/fur_views.hpp"
 #include "engine/fur/length_factors.hpp"
 #include "engine/fur/roots.hpp"
@@ -90,7 +91,15 @@ json to_json(const FurTrainingOptions& o);
 
 struct FurTrainingData {
   Roots roots;
+  // The views at the stage's rendering resolution (crop, image weight, previews, and the training
+  // steps' targets when there are no patches).
   std::vector<FurView> train, held_out;
+  // Native-resolution patches (fur_patches.hpp): when set, view i of the store is train[i] at the
+  // photo's resolution, and each image step renders a patch of it instead of train[i].
+  const FurPatches* patches = nullptr;
+  // Fixed native patches of the held-out views, to score on (empty: the held-out views).
+  std::vector<FurView> held_out_patches;
+  const std::vector<FurView>& scored_views() const { return held_out_patches.empty() ? held_out : held_out_patches; }
   defur::SdfFile bald_sdf;
   std::vector<float> surface_points;  // points on M_NeuS where fur grows (the chamfer's queries), xyz
   glm::vec3 lo{0.f}, hi{0.f};         // M_NeuS's box grown by the longest fur: the chamfer's grid

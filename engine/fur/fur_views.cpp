@@ -6,6 +6,7 @@
 #include "engine/core/error.hpp"
 #include "engine/defur/nonbald_masks.hpp"
 #include "engine/orient/orientation_map.hpp"
+#include "engine/orient/orientation_scales.hpp"
 
 namespace nf::fur {
 
@@ -19,7 +20,7 @@ io::Camera scaled_crop(const io::Camera& camera, double sx, double sy, std::uint
 }
 
 FurView make_fur_view(gpu::Context& gpu, const io::Scene& scene, std::uint32_t camera, const io::Image* nonbald,
-                      const geometry::Mesh& bald, const FurViewOptions& options) {
+                      const geometry::Mesh& bald, const FurViewOptions& options, NativeTargets* native) {
   const io::Camera& cam = scene.cameras.at(camera);
   const io::Image photo = io::read_image(cam.image);
   if (photo.width != cam.width || photo.height != cam.height)
@@ -138,6 +139,27 @@ FurView make_fur_view(gpu::Context& gpu, const io::Scene& scene, std::uint32_t c
   for (std::uint64_t p = 0; p < n; ++p) reliable += double(v.orientation_weight[p]) * v.gabor_confidence[p], fur_pixels += v.orientation_weight[p];
   v.orientation_reliability = fur_pixels > 0 ? reliable / fur_pixels : 0.0;
   v.body_depth = defur::camera_depth(gpu, bald, v.crop);
+  if (native) {
+    const std::uint32_t nx0 = std::uint32_t(std::max(0, int(bx0) - int(options.margin_px))),
+                        ny0 = std::uint32_t(std::max(0, int(by0) - int(options.margin_px)));
+    const std::uint32_t nx1 = std::min(cam.width, bx1 + options.margin_px), ny1 = std::min(cam.height, by1 + options.margin_px);
+    const orient::ScaledOrientation scaled = orient::scaled_orientation(
+        photo, mask, options.gabor_scales, options.coherence_px,
+        [&](const io::Image& image, const std::vector<std::uint8_t>& m) { return orient::gabor_orientation(gpu, image, &m, options.gabor); },
+        &gabor);
+    NativeTargets& t = *native;
+    t.crop = scaled_crop(cam, 1, 1, nx0, ny0, nx1 - nx0, ny1 - ny0);
+    const std::uint64_t count = t.pixels();
+    t.flags.assign(count, 0), t.angle.assign(count, 0.f), t.confidence.assign(count, 0.f), t.scale.assign(count, 0);
+    for (std::uint32_t y = 0; y < t.crop.height; ++y)
+      for (std::uint32_t x = 0; x < t.crop.width; ++x) {
+        const std::size_t i = std::size_t(y + ny0) * cam.width + x + nx0, o = std::size_t(y) * t.crop.width + x;
+        const bool grows = !nonbald || nonbald->pixels[i * nonbald->channels] > 0.5f;
+        t.flags[o] = std::uint8_t((mask[i] ? NativeTargets::kMask : 0) | (mask[i] && grows ? NativeTargets::kFur : 0) |
+                                  (inner[i] && grows ? NativeTargets::kOriented : 0));
+        t.angle[o] = scaled.angle[i], t.confidence[o] = scaled.reliability[i], t.scale[o] = scaled.scale[i];
+      }
+  }
   return v;
 }
 

@@ -43,6 +43,9 @@ struct FurViewOptions {
   // radius, support x max(sigma_x, sigma_y)).
   int outline_px = -1;
   std::uint32_t coherence_px = 9;  // photo pixels: the orientation reliability's window
+  // Scales of the native-resolution targets' Gabor maps (orientation_scales.hpp): the photo and
+  // its halvings. The targets at the rendering resolution use the photo's own map only.
+  std::uint32_t gabor_scales = 2;
   orient::GaborParams gabor;
 };
 
@@ -56,10 +59,22 @@ struct FurView {
   std::uint64_t pixels() const { return std::uint64_t(crop.width) * crop.height; }
 };
 
+// The view's targets at the photo's own resolution over the same box as the view's crop (grown by
+// margin_px photo pixels): what native-resolution patches are cut from (fur_patches.hpp). At that
+// resolution the mask, the fur and the orientation weight are binary.
+struct NativeTargets {
+  io::Camera crop;  // the camera cropped to the box, at scale 1
+  enum Flag : std::uint8_t { kMask = 1, kFur = 2, kOriented = 4 };  // kFur: mask and non-bald; kOriented: fur away from the outline
+  std::vector<std::uint8_t> flags;
+  std::vector<float> angle, confidence;  // the best of the scales' Gabor orientations and its reliability
+  std::vector<std::uint8_t> scale;        // which scale that was (0: the photo's own)
+  std::uint64_t pixels() const { return std::uint64_t(crop.width) * crop.height; }
+};
+
 // `nonbald`: the defur stage's mask for this camera (full resolution), or empty for "all fur".
 // InputError naming the file when the photo or mask cannot be read or the mask is empty.
 FurView make_fur_view(gpu::Context& gpu, const io::Scene& scene, std::uint32_t camera, const io::Image* nonbald,
-                      const geometry::Mesh& bald, const FurViewOptions& options);
+                      const geometry::Mesh& bald, const FurViewOptions& options, NativeTargets* native = nullptr);
 
 // The cropped camera's projection scaled from the photo's pixel grid: (sx, sy) scale, (x0, y0) the
 // crop's corner at the new scale.

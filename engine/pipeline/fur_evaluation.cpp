@@ -108,7 +108,7 @@ void FurCurve::add_point(fur::FurTrainer& trainer, const fur::FurTrainingData& d
   // Scoring is not training time: the x axis is the trainer's own clock.
   const Stopwatch t;
   const std::uint32_t scored = s_.score_strands ? s_.score_strands : s_.training.strands;
-  const HeldOutScores held = score_field_held_out(trainer, data.held_out, scene, scored, s_.training.seed + 7, nullptr);
+  const HeldOutScores held = score_field_held_out(trainer, data.scored_views(), scene, scored, s_.training.seed + 7, nullptr);
   json p{{"step", trainer.step()}, {"seconds", trainer.step() ? trainer.last_report().seconds : 0.0}, {"held_out", held_out_json(held)}};
   if (trainer.step()) p["loss"] = trainer.last_report().loss;
   const metrics::GroomTruth truth = truth_.truth();

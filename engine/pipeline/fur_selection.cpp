@@ -48,7 +48,7 @@ GroomSignals measure_groom(fur::FurTrainer& trainer, const fur::FurTrainingData&
   GroomSignals g;
   if (!data.held_out.empty()) {
     const std::uint32_t scored = s.score_strands ? s.score_strands : s.training.strands;
-    const HeldOutScores h = score_field_held_out(trainer, data.held_out, scene, scored, s.training.seed + 7, nullptr);
+    const HeldOutScores h = score_field_held_out(trainer, data.scored_views(), scene, scored, s.training.seed + 7, nullptr);
     g.held_out = true, g.silhouette_iou = h.silhouette_iou, g.orientation_error_deg = h.orientation_error_deg;
   }
   metrics::StrandSample sample =

@@ -10,12 +10,14 @@
 #include "engine/core/interrupt.hpp"
 #include "engine/core/log.hpp"
 #include "engine/core/progress.hpp"
+#include "engine/core/random.hpp"
 #include "engine/core/stats.hpp"
 #include "engine/core/stopwatch.hpp"
 #include "engine/body/regions.hpp"
 #include "engine/defur/vertex_fur.hpp"
 #include "engine/fur/baseline_groom.hpp"
 #include "engine/fur/fur_model_file.hpp"
+#include "engine/fur/fur_resolution.hpp"
 #include "engine/fur/ground_truth_inputs.hpp"
 #include "engine/gpu/context.hpp"
 #include "engine/io/ground_truth.hpp"
@@ -185,6 +187,7 @@ struct FurInputs {
   double cm = 1;
   fur::FurTrainingData data;
   std::optional<fur::GroundTruthInputs> swapped;
+  std::unique_ptr<fur::FurPatches> patches;  // with fur.patch: the views' native targets on disk
 };
 
 FurInputs read_inputs(StageContext& c, const FurSettings& s) {
@@ -232,8 +235,9 @@ void split_views(const io::Scene& scene, int hold_out_every, std::vector<std::ui
   if (train.empty() && !held_out.empty()) train.swap(held_out);  // a single view trains
 }
 
-// The views' targets at the stage's resolution, cropped to the masks; returns the log's figures.
-json make_views(StageContext& c, const FurSettings& s, FurInputs& in) {
+// The views' targets at the stage's resolution, cropped to the masks, and with fur.patch their
+// native targets in a patch store under `scratch`; returns the log's figures.
+json make_views(StageContext& c, const FurSettings& s, FurInputs& in, const fs::path& scratch) {
   std::vector<std::uint32_t> train_ids, held_ids;
   split_views(c.scene, s.hold_out_every, train_ids, held_ids);
   std::vector<std::uint32_t> all(c.scene.cameras.size());
@@ -242,17 +246,39 @@ json make_views(StageContext& c, const FurSettings& s, FurInputs& in) {
   fur::FurViewOptions view_options;
   view_options.max_side = s.resolution, view_options.margin_px = s.margin_px;
   const fs::path masks = defur_outputs(c.work).masks();
-  const auto make = [&](const std::vector<std::uint32_t>& ids, std::vector<fur::FurView>& views) {
+  if (s.patch) {
+    in.patches = std::make_unique<fur::FurPatches>(c.gpu, in.bald, scratch / "patches", s.patch);
+    in.data.patches = in.patches.get();
+  }
+  // Held-out views' native targets go to a store of their own, which only their fixed patches outlive.
+  std::unique_ptr<fur::FurPatches> held_store;
+  if (s.patch) held_store = std::make_unique<fur::FurPatches>(c.gpu, in.bald, scratch / "held_out_patches", s.patch);
+  std::uint32_t most_scales = 1;
+  const auto make = [&](const std::vector<std::uint32_t>& ids, std::vector<fur::FurView>& views, fur::FurPatches* store) {
     for (std::uint32_t v : ids) {
       const fs::path nonbald_file = masks / (names[v] + ".png");
       // The defur stage's non-bald masks belong to the pipeline's M_bald, not to the true one.
       const std::optional<io::Image> nonbald =
           s.truth != "all" && fs::exists(nonbald_file) ? std::optional(io::read_image(nonbald_file)) : std::nullopt;
-      views.push_back(fur::make_fur_view(c.gpu, c.scene, v, nonbald ? &*nonbald : nullptr, in.bald, view_options));
+      fur::NativeTargets native;
+      fur::FurViewOptions o = view_options;
+      if (store) {
+        // The scales the photo's strands need (fur_resolution.hpp), from the fur's length in it.
+        fur::FurView probe;
+        probe.crop = c.scene.cameras[v], probe.scale = 1;
+        o.gabor_scales = fur::gabor_scales_for(fur::fur_length_pixels(probe, in.data.roots), s.training.resolved_fur_px, s.gabor_scales);
+        most_scales = std::max(most_scales, o.gabor_scales);
+      }
+      views.push_back(fur::make_fur_view(c.gpu, c.scene, v, nonbald ? &*nonbald : nullptr, in.bald, o, store ? &native : nullptr));
+      if (store) store->add(v, native);
     }
   };
-  make(train_ids, in.data.train);
-  make(held_ids, in.data.held_out);
+  make(train_ids, in.data.train, in.patches.get());
+  make(held_ids, in.data.held_out, held_store.get());
+  if (held_store)
+    for (std::uint32_t h = 0; h < held_store->size(); ++h)
+      for (const fur::PatchPlace& p : held_store->places(h, s.held_out_patches, splitmix64(s.training.seed + 7 + h)))
+        in.data.held_out_patches.push_back(held_store->cut(h, p));
   std::uint64_t rendered = 0, full = 0;
   double reliability = 0;
   for (const fur::FurView& v : in.data.train) {
@@ -264,8 +290,21 @@ json make_views(StageContext& c, const FurSettings& s, FurInputs& in) {
   log::info("fur: ", in.data.roots.size(), " roots, ", in.data.train.size(), " training views and ", in.data.held_out.size(),
             " held out; rendering ", per_view, " pixels a view (", full ? 100.0 * double(rendered) / double(full) : 0.0, " % of the photos' pixels)");
   if (in.data.train.empty()) log::warn("fur: no view has a photo and a mask; only the geometric losses will shape the fur");
-  return {{"train", in.data.train.size()}, {"held_out", in.data.held_out.size()}, {"orientation_reliability", reliability},
-          {"rendered_pixels_per_view", per_view}, {"rendered_fraction_of_photo", full ? double(rendered) / double(full) : 0.0}};
+  json figures{{"train", in.data.train.size()}, {"held_out", in.data.held_out.size()}, {"orientation_reliability", reliability},
+               {"rendered_pixels_per_view", per_view}, {"rendered_fraction_of_photo", full ? double(rendered) / double(full) : 0.0}};
+  if (in.patches) {
+    double native = 0;
+    for (std::uint32_t v = 0; v < in.patches->size(); ++v) native += in.patches->orientation_reliability(v) / double(in.patches->size());
+    log::info("fur: image steps render patches of up to ", s.patch, " px at the photos' resolution; their orientation maps are ", 100.0 * native,
+              " % reliable there (up to ", most_scales, " Gabor scale(s)); ", double(in.patches->bytes_on_disk()) / 1e6, " MB of targets on disk");
+    figures["patches"] = {{"size", s.patch},
+                          {"orientation_reliability", native},
+                          {"gabor_scales", most_scales},
+                          {"gabor_scale_share", in.patches->scale_share()},
+                          {"held_out_patches", in.data.held_out_patches.size()},
+                          {"bytes_on_disk", in.patches->bytes_on_disk()}};
+  }
+  return figures;
 }
 
 // The steps to train: all of them, or only the warm-up where no training photo resolves the fur
@@ -442,7 +481,7 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
   seconds["read"] = t.seconds();
 
   t.restart();
-  json views = make_views(c, s, in);
+  json views = make_views(c, s, in, resume);
   seconds["views"] = t.seconds();
   const std::uint32_t scored = s.score_strands ? s.score_strands : s.training.strands;
   const FurGroundTruth gt = read_fur_ground_truth(c.scene_dir, s, std::min<std::uint32_t>(scored, std::uint32_t(in.data.roots.size())), in.cm);
@@ -478,16 +517,18 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
   t.restart();
   std::vector<std::vector<float>> held_images;
   const auto stop_if_scoring_interrupted = [&] { stop_if_interrupted("scoring"); };
-  const HeldOutScores held = score_field_held_out(*trainer, in.data.held_out, c.scene, scored, s.training.seed + 7, &held_images,
-                                                  stop_if_scoring_interrupted);
+  // The previews reuse the held-out renderings when these are the whole views (not patches).
+  const std::vector<fur::FurView>& held_views = in.data.scored_views();
+  const HeldOutScores held = score_field_held_out(*trainer, held_views, c.scene, scored, s.training.seed + 7,
+                                                  in.data.held_out_patches.empty() ? &held_images : nullptr, stop_if_scoring_interrupted);
   json held_json = held_out_json(held);
   held_json["views"] = held.views;
   if (!in.data.held_out.empty()) {
     const std::vector<std::uint32_t> scored_ids = fur::sample_indices(in.data.roots.size(), scored, s.training.seed + 7);
     const io::StrandSet held_baseline = fur::baseline_groom(in.data.roots, scored_ids, s.training.lying_angle_deg, fur::kStrandPoints);
-    held_json["baseline"] = held_out_json(score_strands_held_out(*trainer, in.data.held_out, c.scene, held_baseline.points, stop_if_scoring_interrupted));
+    held_json["baseline"] = held_out_json(score_strands_held_out(*trainer, held_views, c.scene, held_baseline.points, stop_if_scoring_interrupted));
     if (gt.rendered && gt.rendered->strands > 0)
-      held_json["truth"] = held_out_json(score_strands_held_out(*trainer, in.data.held_out, c.scene, gt.rendered->xyz, stop_if_scoring_interrupted));
+      held_json["truth"] = held_out_json(score_strands_held_out(*trainer, held_views, c.scene, gt.rendered->xyz, stop_if_scoring_interrupted));
     log::info("fur: held-out orientation error ", held.orientation_error_deg, " deg (baseline ", held_json["baseline"]["orientation_error_deg"].get<double>(),
               held_json.contains("truth") ? ", true groom " + std::to_string(held_json["truth"]["orientation_error_deg"].get<double>()) : std::string(), ")");
   }
@@ -581,6 +622,11 @@ const SettingsSchema<FurSettings>& fur_settings() {
         .add("train_decoder", [](F& f) -> auto& { return f.training.train_decoder; }, 0, 1, "fine-tune the strand prior's decoder too")
         .add("resolution", [](F& f) -> auto& { return f.resolution; }, 0, 65536, "longer side of the rendered views in pixels (0: the photos')")
         .add("margin_px", [](F& f) -> auto& { return f.margin_px; }, 0, 4096, "pixels rendered around each view's mask box")
+        .add("patch", [](F& f) -> auto& { return f.patch; }, 0, 8192,
+             "side in pixels of the window of a photo each image step renders at the photo's own resolution (the whole view when smaller; 0: whole views at fur.resolution)")
+        .add("gabor_scales", [](F& f) -> auto& { return f.gabor_scales; }, 1, 4,
+             "with patches: at most this many Gabor maps, of the photo and its halvings (each pixel takes the most reliable; a halving only where the fur spans 2 x resolved_fur_px in it)")
+        .add("held_out_patches", [](F& f) -> auto& { return f.held_out_patches; }, 1, 64, "with patches: fixed patches of each held-out view that score the groom")
         .add("hold_out_every", [](F& f) -> auto& { return f.hold_out_every; }, 0, 1000, "every k-th camera is held out for scoring (0 or 1: none)")
         .add("strands", [](F& f) -> auto& { return f.strands; }, 0, 4e7, "strands inferred into strands.hair")
         .add("metric_strands", [](F& f) -> auto& { return f.metric_strands; }, 1, 1e7, "strands the metrics compare")

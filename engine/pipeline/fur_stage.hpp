@@ -31,6 +31,14 @@ struct FurSettings {
   fur::FurTrainingOptions training;
   fur::FurFieldConfig field;
   std::uint32_t resolution = 512;   // longer side of the rendered views (0: the photos')
+  // Native-resolution patches (fur_patches.hpp): the side of the window of a photo each image step
+  // renders at the photo's own resolution (0: the whole view at `resolution`), and how many fixed
+  // patches of each held-out view score the groom.
+  std::uint32_t patch = 384;
+  std::uint32_t held_out_patches = 4;
+  // With patches: at most this many Gabor maps, the photo's and its halvings' (orientation_scales.hpp),
+  // as many as the fur's length in the photo calls for (fur_resolution.hpp, gabor_scales_for).
+  std::uint32_t gabor_scales = 3;
   std::uint32_t margin_px = 8;
   int hold_out_every = 5;
   std::uint32_t strands = 500000;   // inferred
@@ -56,7 +64,7 @@ const SettingsSchema<FurSettings>& fur_settings();
 class FurStage : public Stage {
  public:
   std::string name() const override { return "fur"; }
-  std::vector<std::string> memory_settings() const override { return {"batch", "resolution", "chamfer_queries", "strands", "metric_strands"}; }
+  std::vector<std::string> memory_settings() const override { return {"batch", "resolution", "patch", "chamfer_queries", "strands", "metric_strands"}; }
   std::vector<std::string> depends_on() const override { return {"frames"}; }
   const StageSettings& settings() const override { return fur_settings(); }
   std::vector<std::filesystem::path> inputs(const StageContext& context) const override;

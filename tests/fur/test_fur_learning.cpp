@@ -21,6 +21,8 @@
 #include "engine/fur/fur_resolution.hpp"
 #include "engine/fur/ground_truth_inputs.hpp"
 #include "engine/io/ground_truth.hpp"
+#include "engine/io/scene.hpp"
+#include "engine/io/view_split.hpp"
 #include "engine/io/strand_files.hpp"
 #include "engine/metrics/groom_scores.hpp"
 #include "engine/synth/synth_scene.hpp"
@@ -208,6 +210,40 @@ TEST_CASE("fur learning: strands lifted too far come back onto the fur, and phot
     FurTrainer gated(ctx, in.data, *prior, {}, o);
     CHECK_FALSE(gated.load_checkpoint(dir / "checkpoint.nfwt"));  // nor with another resolved length
   }
+  // Native-resolution patches (fur_patches.hpp): the training views' targets at the photos' 128 px
+  // in a store, a 48 px window of one a step. The image steps run on patches inside their view,
+  // and a resumed trainer takes the same patch and loss.
+  {
+    const io::Scene scene = io::read_scene(dir / "scene");
+    FurPatches store(ctx, in.bald, dir / "patches", 48);
+    FurViewOptions vo;
+    vo.max_side = 64;  // the views at half the photos' size, the patches at their own
+    FurTrainingData patched = in.data;
+    patched.train.clear();
+    for (std::uint32_t v = 0; v < scene.cameras.size(); ++v) {
+      if (io::is_held_out(v, 5)) continue;
+      NativeTargets native;
+      patched.train.push_back(make_fur_view(ctx, scene, v, nullptr, in.bald, vo, &native));
+      CHECK(native.crop.width > 48);  // a window, not the whole view
+      CHECK(store.add(v, native) == patched.train.size() - 1);
+    }
+    patched.patches = &store;
+    FurTrainer p(ctx, patched, *prior, {}, forced);
+    p.train(forced.warm_steps + 2);
+    const FurStepReport r = p.last_report();
+    CHECK(r.image);
+    CHECK(std::isfinite(r.loss));
+    CHECK(r.silhouette > 0);
+    CHECK(r.pass_seconds.contains("patch"));
+    p.save_checkpoint(dir / "patched.nfwt");
+    FurTrainer q(ctx, patched, *prior, {}, forced);
+    REQUIRE(q.load_checkpoint(dir / "patched.nfwt"));
+    const FurStepReport a = q.train(forced.warm_steps + 3), b = p.train(forced.warm_steps + 3);
+    CHECK(a.view == b.view);
+    CHECK(a.loss == doctest::Approx(b.loss).epsilon(1e-6));
+  }
+  CHECK_FALSE(fs::exists(dir / "patches"));  // the store's files go with it
+
   open.train(forced.steps);
   const auto [f_open, f_open_mm] = scores(open);
 

@@ -1,0 +1,48 @@
+#pragma once
+// Gabor orientation at several scales, and how far each pixel's orientation can be trusted.
+//
+// The Gabor bank has a fixed width (sigma_x 1.8 px across a strand, a 4.3 px period): it sees
+// strands that are 1-3 photo pixels wide. A strand is as many pixels wide as the photo is large,
+// so a 4096 px photo's strands are too wide for the bank that fits a 1024 px photo's. Each scale s
+// filters the photo halved s times; per pixel the scale whose orientation is most reliable wins
+// (the finer one on a tie), so one photo can hold fine fur on the face and coarse fur on the back.
+//
+// Reliability: the coherence of the Gabor map's doubled-angle vectors (weighted by the filters'
+// confidence) in a window of `window` pixels of that scale, centred on the pixel and clipped at the
+// image's border, above the coherence as many random orientations would show (2 / sqrt(pixels)),
+// clamped to [0, 1]. Gabor maps of textureless fur (sub-pixel strands, smooth shading) answer with
+// confident but incoherent angles; this keeps them at 0.
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "engine/io/image.hpp"
+#include "engine/orient/orientation_map.hpp"
+
+namespace nf::orient {
+
+// Per pixel of `map`, the reliability above; `window` odd or not, its half is window / 2.
+std::vector<float> orientation_reliability(const OrientationMap& map, std::uint32_t window);
+
+// The image halved by a 2 x 2 box (an odd last row or column keeps its own pixels); a mask pixel
+// of the halved image is set when any of its pixels is.
+io::Image halve(const io::Image& image);
+std::vector<std::uint8_t> halve_mask(const std::vector<std::uint8_t>& mask, std::uint32_t width, std::uint32_t height);
+
+struct ScaledOrientation {
+  std::uint32_t width = 0, height = 0;
+  std::vector<float> angle, reliability;  // per pixel of the full image
+  std::vector<std::uint8_t> scale;        // the scale that won: 0 the image itself, s halved s times
+};
+
+// The map of an image under a mask (the GPU's gabor_orientation, or the CPU reference in tests).
+using OrientationOf = std::function<OrientationMap(const io::Image& image, const std::vector<std::uint8_t>& mask)>;
+
+// `scales` >= 1 scales (halving stops when a side would fall below 16 px). `finest`: the image's
+// own map when the caller has it already (not recomputed). InputError for scales 0 or a mask of
+// the wrong size.
+ScaledOrientation scaled_orientation(const io::Image& image, const std::vector<std::uint8_t>& mask, std::uint32_t scales,
+                                     std::uint32_t window, const OrientationOf& orientation_of,
+                                     const OrientationMap* finest = nullptr);
+
+}  // namespace nf::orient
