@@ -26,6 +26,7 @@
 #include "engine/synth/preview.hpp"
 #include "engine/orient/scene_orientation.hpp"
 #include "engine/pipeline/stages.hpp"
+#include "engine/synth/strand_renderer.hpp"
 #include "engine/synth/synth_scene.hpp"
 #include "engine/synth/world_frame.hpp"
 
@@ -401,6 +402,10 @@ int main(int argc, char** argv) {
   synth->add_option("--seed", synth_options.seed, "varies proportions, pose, fur and placement (default 1)");
   synth->add_option("--strands", synth_options.strands, "ground-truth strands (default 100000)")->check(CLI::Range(1, 20000000));
   synth->add_option("--spp-axis", synth_options.samples_per_axis, "anti-aliasing: s x s samples per pixel (default 3)")->check(CLI::Range(1, 16));
+  synth->add_option("--shading", synth_options.shading, "how strands reflect light: kajiya-kay (default), two-lobe (Marschner's two highlights), matte")
+      ->check(CLI::IsMember(nf::synth::hair_shading_names()));
+  synth->add_option("--hair-width", synth_options.hair_width, "strands' rendered width as a multiple of the style's (default 1)")->check(CLI::Range(0.01, 100.0));
+  synth->add_option("--noise", synth_options.photo_noise, "Gaussian sensor noise on the photos, sigma in levels of 255 (default 0)")->check(CLI::Range(0.0, 255.0));
   synth->add_option("--out", synth_out, "output folder (must be new, or an earlier synth scene with --overwrite)")->required();
   synth->add_option("--frame", synth_options.frame,
                     "world frame of the files: y-up-m (default) or z-up-mm (z up, millimetres, metres from the origin); the photos are the same")

@@ -64,8 +64,26 @@ struct StrandRenderer::Impl {
     const float tv = glm::dot(t, view), sin_v = std::sqrt(std::max(0.0f, 1 - tv * tv));
     for (const Light& l : lights) {
       const float tl = glm::dot(t, l.direction), sin_l = std::sqrt(std::max(0.0f, 1 - tl * tl));
-      const float spec = std::pow(std::max(0.0f, sin_l * sin_v - tl * tv), 40.0f);
-      c += l.intensity * (albedo * sin_l * 0.8f + glm::vec3(0.12f) * spec);
+      switch (options.shading) {
+        case HairShading::KajiyaKay: {
+          const float spec = std::pow(std::max(0.0f, sin_l * sin_v - tl * tv), 40.0f);
+          c += l.intensity * (albedo * sin_l * 0.8f + glm::vec3(0.12f) * spec);
+          break;
+        }
+        case HairShading::TwoLobe: {
+          // Longitudinal angles from the normal plane; the mirror direction has theta_h = 0.
+          const float half = 0.5f * (std::asin(std::clamp(tl, -1.f, 1.f)) + std::asin(std::clamp(tv, -1.f, 1.f)));
+          const auto lobe = [&](float shift_deg, float width_deg) {
+            const float d = (half - glm::radians(shift_deg)) / glm::radians(width_deg);
+            return std::exp(-0.5f * d * d);
+          };
+          c += l.intensity * (albedo * sin_l * 0.6f + glm::vec3(0.22f) * lobe(-5.f, 6.f) + albedo * 0.5f * lobe(7.5f, 10.f));
+          break;
+        }
+        case HairShading::Matte:
+          c += l.intensity * albedo * sin_l * 0.85f;
+          break;
+      }
     }
     return c;
   }
@@ -88,6 +106,18 @@ struct StrandRenderer::Impl {
     return c;
   }
 };
+
+HairShading hair_shading_from(const std::string& name) {
+  if (name == "kajiya-kay") return HairShading::KajiyaKay;
+  if (name == "two-lobe") return HairShading::TwoLobe;
+  if (name == "matte") return HairShading::Matte;
+  throw UsageError("hair shading: unknown '" + name + "' (kajiya-kay, two-lobe, matte)");
+}
+
+const std::vector<std::string>& hair_shading_names() {
+  static const std::vector<std::string> names{"kajiya-kay", "two-lobe", "matte"};
+  return names;
+}
 
 StrandRenderer::StrandRenderer(const geometry::Mesh& body, const BodyLook& body_look, const io::StrandSet& strands,
                                const StrandLook& look, const RenderOptions& options)

@@ -17,8 +17,17 @@
 
 namespace nf::synth {
 
+// How strands reflect light. kajiya-kay: diffuse along the tangent and one white highlight (the
+// default); two-lobe: Marschner's two highlights, a white one shifted towards the root (R) and a
+// coloured one towards the tip (TRT), each a Gaussian in the longitudinal half angle; matte:
+// diffuse only, no highlight (fur whose strands show no sheen).
+enum class HairShading { KajiyaKay, TwoLobe, Matte };
+HairShading hair_shading_from(const std::string& name);  // UsageError for an unknown name
+const std::vector<std::string>& hair_shading_names();
+
 struct RenderOptions {
   std::uint32_t samples_per_axis = 3;   // s x s stratified samples per pixel
+  HairShading shading = HairShading::KajiyaKay;
   glm::vec3 background{0.05f, 0.05f, 0.06f};  // linear RGB
   std::uint32_t render_points = 34;     // points per strand traced (resampled from the strand's own)
 };

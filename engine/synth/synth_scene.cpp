@@ -15,6 +15,7 @@
 #include "engine/core/error.hpp"
 #include "engine/core/log.hpp"
 #include "engine/core/progress.hpp"
+#include "engine/core/random.hpp"
 #include "engine/geometry/mesh_tools.hpp"
 #include "engine/io/image.hpp"
 #include "engine/io/mesh.hpp"
@@ -64,6 +65,9 @@ void check_destination(const fs::path& out, bool overwrite) {
 json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
   if (o.views == 0 || o.resolution < 8 || o.resolution > 8192) throw UsageError("synth: --views must be >= 1 and --res in [8, 8192]");
   if (o.strands == 0) throw UsageError("synth: --strands must be >= 1");
+  if (!(o.hair_width > 0 && o.hair_width <= 100)) throw UsageError("synth: --hair-width must lie in (0, 100], got " + std::to_string(o.hair_width));
+  if (!(o.photo_noise >= 0 && o.photo_noise <= 255)) throw UsageError("synth: --noise must lie in [0, 255], got " + std::to_string(o.photo_noise));
+  hair_shading_from(o.shading);  // an unknown shading fails before any work
   const WorldFrame frame = world_frame(o.frame);
   // "scenes/cat/" and "scenes/./cat" name the same folder; the temp folder sits beside it.
   fs::path out_dir = fs::absolute(requested_out).lexically_normal();
@@ -137,16 +141,23 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
   for (std::int32_t r : bald.regions) body_look.vertex_colors.push_back(skin_color(o.animal, static_cast<body::Region>(r)));
   StrandLook look;
   look.root_colors = fur.root_colors;
-  look.radius = style.strand_radius_fraction * proportions.torso_length;
+  look.radius = style.strand_radius_fraction * proportions.torso_length * o.hair_width;
   RenderOptions render_options;
   render_options.samples_per_axis = o.samples_per_axis;
+  render_options.shading = hair_shading_from(o.shading);
   const StrandRenderer renderer(bald, body_look, fur.strands, look, render_options);
   timings["render_setup_s"] = clock.lap();
   Progress progress("synth render", scene.cameras.size());
   double coverage_sum = 0;
   for (std::size_t i = 0; i < scene.cameras.size(); ++i) {
     io::Camera& cam = scene.cameras[i];
-    const Rendered r = renderer.render(cam);
+    Rendered r = renderer.render(cam);
+    if (o.photo_noise > 0) {
+      // Sensor noise on the stored values, as a camera adds it before encoding.
+      std::mt19937_64 noise_rng(splitmix64(std::uint64_t(o.seed) * 1000003u + i));
+      std::normal_distribution<float> noise(0.f, o.photo_noise / 255.f);
+      for (float& v : r.rgb.pixels) v = std::clamp(v + noise(noise_rng), 0.f, 1.f);
+    }
     cam.image = out / "images" / (cam.name + ".png");
     cam.mask = out / "masks" / (cam.name + ".png");
     io::Image mask{r.coverage.width, r.coverage.height, 1, std::vector<float>(r.coverage.pixels.size())};
@@ -198,6 +209,7 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
                  {"voxel", envelope.voxel * frame.scale}, {"closing_radius", envelope.closing_radius * frame.scale},
                  {"vertices", envelope.mesh.vertex_count()}}},
       {"render", {{"views", o.views}, {"resolution", o.resolution}, {"samples_per_pixel", o.samples_per_axis * o.samples_per_axis},
+                  {"shading", o.shading}, {"hair_width", o.hair_width}, {"photo_noise", o.photo_noise},
                   {"mean_mask_coverage", coverage_sum / (double(o.views) * o.resolution * o.resolution)}}},
   };
   timings["write_s"] = clock.lap();

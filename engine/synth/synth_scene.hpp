@@ -26,6 +26,13 @@ struct SynthOptions {
   // "z-up-mm" (z up, millimetres, the animal metres from the origin). The animal, the photos and
   // the masks are the same in both; only the coordinates of everything else change.
   std::string frame = "y-up-m";
+  // The photos' look, to make scenes unlike the defaults (a renderer the engine was not tuned on):
+  // the strands' shading (strand_renderer.hpp: kajiya-kay, two-lobe, matte), their rendered width
+  // as a multiple of the style's, and Gaussian sensor noise added to each photo's 8-bit values
+  // (sigma in levels of 255, seeded by the scene's seed and the view).
+  std::string shading = "kajiya-kay";
+  float hair_width = 1;
+  float photo_noise = 0;
   bool overwrite = false;              // replace an existing synth output folder
 };
 

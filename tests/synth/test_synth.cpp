@@ -282,3 +282,77 @@ TEST_CASE("a written synthetic scene: files, ground truth, and roots inside the 
   }
   fs::remove_all(root);
 }
+
+TEST_CASE("the photos' look: shading models, hair width and sensor noise change what they should and nothing else") {
+  io::Camera cam;
+  cam.name = "front";
+  cam.width = cam.height = 120;
+  cam.fx = cam.fy = 300, cam.cx = cam.cy = 60;
+  cam.camera_to_world = glm::translate(glm::dmat4(1.0), glm::dvec3(0, 0, 2));
+  // A fan of strands in the image plane at every angle: every model's highlight shows somewhere.
+  std::vector<float> xyz;
+  const std::uint32_t strands = 24;
+  for (std::uint32_t s = 0; s < strands; ++s) {
+    const float a = 3.14159265f * float(s) / strands;
+    for (int k = 0; k < 50; ++k) {
+      const float t = 0.02f + 0.3f * float(k) / 49.f;
+      xyz.insert(xyz.end(), {t * std::cos(a), t * std::sin(a), 0.1f * t});
+    }
+  }
+  const io::StrandSet fan = io::StrandSet::uniform(strands, 50, xyz);
+  synth::StrandLook look;
+  look.radius = 0.004f;
+  look.root_colors.assign(strands, glm::vec3(0.6f, 0.3f, 0.1f));
+  const auto render = [&](synth::HairShading shading, float width) {
+    synth::RenderOptions o;
+    o.samples_per_axis = 2, o.shading = shading;
+    synth::StrandLook l = look;
+    l.radius *= width;
+    return synth::StrandRenderer(geometry::Mesh{}, {}, fan, l, o).render(cam);
+  };
+  const synth::Rendered kk = render(synth::HairShading::KajiyaKay, 1), two = render(synth::HairShading::TwoLobe, 1),
+                        matte = render(synth::HairShading::Matte, 1), wide = render(synth::HairShading::KajiyaKay, 2);
+  const auto sum = [](const io::Image& i) {
+    double s = 0;
+    for (float v : i.pixels) s += v;
+    return s;
+  };
+  // The shading changes the colours, not where the strands are.
+  CHECK(sum(two.coverage) == doctest::Approx(sum(kk.coverage)));
+  CHECK(sum(matte.coverage) == doctest::Approx(sum(kk.coverage)));
+  double differ = 0, brightest_kk = 0, brightest_matte = 0;
+  for (std::size_t p = 0; p < kk.rgb.pixels.size(); ++p) {
+    differ += std::abs(kk.rgb.pixels[p] - two.rgb.pixels[p]);
+    brightest_kk = std::max(brightest_kk, double(kk.rgb.pixels[p]));
+    brightest_matte = std::max(brightest_matte, double(matte.rgb.pixels[p]));
+  }
+  CHECK(differ / sum(kk.coverage) > 0.02);  // per covered pixel and channel
+  CHECK(brightest_kk > brightest_matte);     // a highlight only adds light
+  // Twice the width covers about twice the pixels.
+  CHECK(sum(wide.coverage) == doctest::Approx(2 * sum(kk.coverage)).epsilon(0.15));
+  CHECK_THROWS_AS(synth::hair_shading_from("phong"), UsageError);
+  CHECK(synth::hair_shading_from("two-lobe") == synth::HairShading::TwoLobe);
+
+  // Sensor noise: the same scene with noise of 6 levels differs from the clean one by about that,
+  // and the masks, the cameras and the truth do not change.
+  const fs::path root = fs::temp_directory_path() / "nf_synth_look_test";
+  fs::remove_all(root);
+  synth::SynthOptions o;
+  o.animal = "cat", o.views = 1, o.resolution = 64, o.seed = 2, o.strands = 3000, o.samples_per_axis = 1, o.body_voxel = 0.01f;
+  synth::synthesize_scene(root / "clean", o);
+  o.photo_noise = 6;
+  const json info = synth::synthesize_scene(root / "noisy", o);
+  CHECK(info["render"]["photo_noise"].get<double>() == 6.0);
+  const io::Image a = io::read_image(root / "clean" / "images" / "000.png"), b = io::read_image(root / "noisy" / "images" / "000.png");
+  REQUIRE(a.pixels.size() == b.pixels.size());
+  double sq = 0;
+  std::size_t n = 0;
+  for (std::size_t p = 0; p < a.pixels.size(); ++p)
+    if (a.pixels[p] > 0.05f && a.pixels[p] < 0.95f) sq += double(a.pixels[p] - b.pixels[p]) * (a.pixels[p] - b.pixels[p]), ++n;
+  REQUIRE(n > 100);
+  CHECK(std::sqrt(sq / double(n)) * 255 == doctest::Approx(6.0).epsilon(0.15));
+  CHECK(io::read_image(root / "clean" / "masks" / "000.png").pixels == io::read_image(root / "noisy" / "masks" / "000.png").pixels);
+  o.photo_noise = -1;
+  CHECK_THROWS_AS(synth::synthesize_scene(root / "bad", o), UsageError);
+  fs::remove_all(root);
+}
