@@ -53,11 +53,11 @@ std::vector<std::string> variant_settings(const std::string& variant, const fs::
   if (variant == "select_trained") return {"fur.select=trained"};  // the selection off
   if (variant == "lengths") return {"fur.length_lr=0.01"};         // lengths learned from the photos
   if (variant == "patches_off") return {"fur.patch=0"};             // whole views at fur.resolution
-  for (const char* loss : {"silhouette", "orientation", "direction", "chamfer", "penetration", "curvature"})
+  for (const char* loss : {"silhouette", "orientation", "direction", "chamfer", "penetration", "curvature", "envelope"})
     if (variant == std::string("no_") + loss) return {std::string("fur.") + loss + "_weight=0"};
   throw UsageError("NF_BENCH_FUR_VARIANTS: unknown variant '" + variant +
                    "' (warm_off, truth_knowledge, truth_knowledge_file, truth_envelope, truth_all, select_trained, lengths, patches_off, no_silhouette, no_orientation, "
-                   "no_direction, no_chamfer, no_penetration, no_curvature; join with '+')");
+                   "no_direction, no_chamfer, no_penetration, no_curvature, no_envelope; join with '+')");
 }
 
 bool sets_stage(const std::vector<std::string>& settings, const std::string& stage) {

@@ -37,8 +37,8 @@ std::pair<double, double> depth_range(const FurView& v, double reach) {
 }  // namespace
 
 json to_json(const FurLossWeights& w) {
-  return {{"silhouette", w.silhouette}, {"orientation", w.orientation}, {"direction", w.direction},
-          {"chamfer", w.chamfer},       {"penetration", w.penetration}, {"curvature", w.curvature}};
+  return {{"silhouette", w.silhouette}, {"orientation", w.orientation}, {"direction", w.direction}, {"chamfer", w.chamfer},
+          {"penetration", w.penetration}, {"curvature", w.curvature},       {"envelope", w.envelope}};
 }
 
 void FurTrainingOptions::validate() const {
@@ -51,7 +51,8 @@ void FurTrainingOptions::validate() const {
   if (!(lying_angle_deg >= 0 && lying_angle_deg <= 90)) fail("lying_angle_deg must be in [0, 90]");
   if (!(length_lr >= 0 && std::isfinite(length_lr))) fail("length_lr must be finite and non-negative");
   length_bounds.validate();
-  for (double w : {weights.silhouette, weights.orientation, weights.direction, weights.chamfer, weights.penetration, weights.curvature})
+  for (double w : {weights.silhouette, weights.orientation, weights.direction, weights.chamfer, weights.penetration, weights.curvature,
+                   weights.envelope})
     if (!(w >= 0 && std::isfinite(w))) fail("loss weights must be finite and non-negative");
 }
 
@@ -86,6 +87,7 @@ json to_json(const FurStepReport& r) {
          {"chamfer", r.chamfer},
          {"penetration", r.penetration},
          {"curvature", r.curvature},
+         {"envelope", r.envelope},
          {"chamfer_unmatched", r.chamfer_unmatched},
          {"length_factor_mean", r.length_factor_mean},
          {"lr", r.lr},
@@ -143,6 +145,8 @@ struct FurTrainer::Impl {
         lengths(c, batch.strands, "fur lengths"),
         sdf(c, d.bald_sdf.values, "bald sdf"),
         queries(c, std::max<std::uint64_t>(1, chamfer_queries) * 3, "chamfer queries"),
+        envelope_scratch(c, loss_shape),
+        envelope_sdf(c, d.envelope_sdf.values.empty() ? std::vector<float>{1.f} : d.envelope_sdf.values, "envelope sdf"),
         losses(c, 4, "fur image losses") {
     std::uint64_t most = 1;
     for (const auto* views : {&d.train, &d.held_out, &d.held_out_patches})
@@ -153,6 +157,12 @@ struct FurTrainer::Impl {
     grid.dims = {d.bald_sdf.grid.dims.x, d.bald_sdf.grid.dims.y, d.bald_sdf.grid.dims.z};
     grid.origin = {d.bald_sdf.grid.origin.x, d.bald_sdf.grid.origin.y, d.bald_sdf.grid.origin.z};
     grid.spacing = d.bald_sdf.grid.voxel;
+    has_envelope = !d.envelope_sdf.values.empty();
+    if (has_envelope) {
+      envelope_grid.dims = {d.envelope_sdf.grid.dims.x, d.envelope_sdf.grid.dims.y, d.envelope_sdf.grid.dims.z};
+      envelope_grid.origin = {d.envelope_sdf.grid.origin.x, d.envelope_sdf.grid.origin.y, d.envelope_sdf.grid.origin.z};
+      envelope_grid.spacing = d.envelope_sdf.grid.voxel;
+    }
   }
   FurField::Batch batch;
   splat::StrandRasterizer rasterizer;
@@ -162,7 +172,11 @@ struct FurTrainer::Impl {
   std::uint64_t chamfer_queries;
   StrandChamferScratch chamfer_scratch;
   SdfGridRef grid;
-  gpu::Buffer<float> guides, lengths, sdf, queries, losses;
+  gpu::Buffer<float> guides, lengths, sdf, queries;
+  StrandLossScratch envelope_scratch;  // the strand losses on M_NeuS's negated distance: only their penetration term is used
+  gpu::Buffer<float> envelope_sdf, losses;
+  SdfGridRef envelope_grid;
+  bool has_envelope = false;
   std::unique_ptr<gpu::Buffer<float>> image, grad_image, mask, weight, angle, confidence, depth;
   std::unique_ptr<nn::Adam> adam, adam_decoder;
   std::uint32_t uploaded_view = ~0u;
@@ -310,6 +324,12 @@ FurStepReport FurTrainer::train_step() {
     strand_chamfer_backward(stream, m.queries, m.batch.points, m.chamfer_scratch, options_.weights.chamfer / (radius * radius),
                             m.batch.grad_points, true);
   }
+  const bool envelope = !r.warm && m.has_envelope && options_.weights.envelope > 0;
+  if (envelope) {
+    const StrandLossBatch eb{m.loss_shape, m.envelope_grid, m.batch.points, m.guides, m.lengths, m.envelope_sdf};
+    strand_losses_forward(stream, eb, m.envelope_scratch);
+    strand_losses_backward(stream, eb, m.envelope_scratch, {0.0, 0.0, options_.weights.envelope / radius}, m.batch.grad_points, true);
+  }
   stream.submit_and_wait();
   passes["strand_losses"] = t.seconds();
 
@@ -341,10 +361,11 @@ FurStepReport FurTrainer::train_step() {
     const ChamferValue cv = strand_chamfer_value(m.chamfer_scratch);
     r.chamfer = cv.loss, r.chamfer_unmatched = cv.unmatched;
   }
+  if (envelope) r.envelope = strand_loss_values(m.envelope_scratch, m.loss_shape)[2];
   const FurLossWeights& fw = options_.weights;
   r.loss = fw.direction * r.direction + fw.penetration * r.penetration / radius +
            (r.warm ? 0.0 : fw.curvature * r.curvature + fw.silhouette * r.silhouette + fw.orientation * r.orientation +
-                               fw.chamfer * r.chamfer / (radius * radius));
+                               fw.chamfer * r.chamfer / (radius * radius) + fw.envelope * r.envelope / radius);
   const nn::Adam::Counters counters = m.adam->counters();
   r.grad_norm = counters.last_norm;
   r.skipped_steps = counters.skipped;
@@ -517,6 +538,7 @@ FurStepReport report_from_json(const json& j) {
                              {"direction", &r.direction}, {"chamfer", &r.chamfer}, {"penetration", &r.penetration},
                              {"curvature", &r.curvature}, {"seconds", &r.seconds}})
     *field = j.at(name).get<double>();
+  r.envelope = j.value("envelope", 0.0);  // checkpoints before the envelope loss
   r.chamfer_unmatched = j.at("chamfer_unmatched").get<std::uint64_t>();
   r.length_factor_mean = j.value("length_factor_mean", 1.0);
   r.lr = j.at("lr").get<float>();

@@ -43,6 +43,10 @@ namespace nf::fur {
 // 32.0 at 1000, 38.1 at 10, 62.3 at 1 and 52.5 at 0 (docs/fur-stage.md).
 struct FurLossWeights {
   double silhouette = 0.1, orientation = 1, direction = 1, chamfer = 20, penetration = 1, curvature = 0.01;
+  // Not the paper's: strand points beyond M_NeuS, mean distance outside (in the unit-sphere
+  // normalisation, like penetration). The chamfer from M_NeuS asks strands to reach it; this asks
+  // them to stop there, so a learned length has a force on each side.
+  double envelope = 1;
 };
 json to_json(const FurLossWeights& w);
 
@@ -101,6 +105,7 @@ struct FurTrainingData {
   std::vector<FurView> held_out_patches;
   const std::vector<FurView>& scored_views() const { return held_out_patches.empty() ? held_out : held_out_patches; }
   defur::SdfFile bald_sdf;
+  defur::SdfFile envelope_sdf;        // M_NeuS's signed distance negated (positive inside; set_surface_inputs)
   std::vector<float> surface_points;  // points on M_NeuS where fur grows (the chamfer's queries), xyz
   glm::vec3 lo{0.f}, hi{0.f};         // M_NeuS's box grown by the longest fur: the chamfer's grid
   double scene_radius = 1;            // half the diagonal of M_NeuS's box
@@ -113,7 +118,7 @@ struct FurStepReport {
   std::uint32_t view = 0;  // camera of the step (when `image`)
   bool warm = false;       // a warm-start step (geometric losses only)
   bool image = false;      // the image losses ran (after the warm-up, on a view that resolves the fur)
-  double loss = 0, silhouette = 0, orientation = 0, direction = 0, chamfer = 0, penetration = 0, curvature = 0;
+  double loss = 0, silhouette = 0, orientation = 0, direction = 0, chamfer = 0, penetration = 0, curvature = 0, envelope = 0;
   std::uint64_t chamfer_unmatched = 0;
   double length_factor_mean = 1;  // the length factors' geometric mean over the step's strands
   float lr = 0, grad_norm = 0;

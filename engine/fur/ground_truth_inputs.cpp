@@ -33,6 +33,15 @@ void set_surface_inputs(FurTrainingData& data, const geometry::Mesh& outer, cons
   const float longest = data.roots.size() ? *std::max_element(data.roots.length.begin(), data.roots.length.end()) : 0.f;
   data.lo = b.lo - glm::vec3(longest), data.hi = b.hi + glm::vec3(longest);
   data.scene_radius = 0.5 * double(glm::length(b.hi - b.lo));
+  // M_NeuS's signed distance, negated (positive inside): the penetration kernel on it penalises
+  // strand points beyond M_NeuS. The band reaches the longest strand, so a tip anywhere outside
+  // is pulled back (beyond the band the distance is clamped and pulls no more).
+  geometry::SdfOptions sdf_options;
+  sdf_options.resolution = 128;
+  sdf_options.band = longest + 3.f * b.longest() / float(sdf_options.resolution - 1);
+  const geometry::SignedDistanceGrid sdf = geometry::signed_distance_grid(outer, sdf_options, "M_NeuS");
+  data.envelope_sdf = {sdf.grid, sdf.band, sdf.distance};
+  for (float& v : data.envelope_sdf.values) v = -v;
 }
 
 GroundTruthInputs ground_truth_inputs(gpu::Context& gpu, const fs::path& scene_dir, const GroundTruthInputOptions& o) {

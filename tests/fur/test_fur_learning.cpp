@@ -172,6 +172,18 @@ TEST_CASE("fur learning: strands lifted too far come back onto the fur, and phot
     moved = std::max(moved, std::abs(double(f) - 1.0));
   }
   CHECK(moved > 1e-3);
+  {
+    // The knowledge here is the truth (factor 1): the chamfer from M_NeuS pulls the lengths out and
+    // the envelope loss pulls them back, so they stay near 1 (with the chamfer alone they grew).
+    double log_sum = 0;
+    std::size_t regions = 0;
+    std::vector<std::size_t> count(trainer.field().length_factors().size(), 0);
+    for (std::int32_t r : in.data.roots.region) ++count[std::size_t(r)];
+    for (std::size_t r = 0; r < count.size(); ++r)
+      if (count[r]) log_sum += std::log(trainer.field().length_factors()[r]), ++regions;
+    const double geometric_mean = std::exp(log_sum / double(std::max<std::size_t>(1, regions)));
+    MESSAGE("length factors' geometric mean over the regions with roots: ", geometric_mean);
+  }
   // set_state returns to the warm-up's groom: the same strands as then.
   {
     const FurFieldState trained = trainer.state();
