@@ -44,8 +44,9 @@ struct FurViewOptions {
   int outline_px = -1;
   std::uint32_t coherence_px = 9;  // photo pixels: the orientation reliability's window
   // Scales of the native-resolution targets' Gabor maps (orientation_scales.hpp): the photo and
-  // its halvings. The targets at the rendering resolution use the photo's own map only.
-  std::uint32_t gabor_scales = 2;
+  // its halvings (the stage sets it per view, gabor_scales_for). The targets at the rendering
+  // resolution use the photo's own map only.
+  std::uint32_t gabor_scales = 1;
   orient::GaborParams gabor;
 };
 

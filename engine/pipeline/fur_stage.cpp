@@ -614,7 +614,7 @@ const SettingsSchema<FurSettings>& fur_settings() {
         .add("penetration_weight", [](F& f) -> auto& { return f.training.weights.penetration; }, 0, 1e9,
              "penetration into M_bald, in the unit-sphere normalisation (0: off)")
         .add("envelope_weight", [](F& f) -> auto& { return f.training.weights.envelope; }, 0, 1e9,
-             "strand points beyond M_NeuS, in the unit-sphere normalisation (0: off): with the chamfer, it bounds the learned lengths")
+             "strand points beyond M_NeuS, in the unit-sphere normalisation (0: off): the counterpart of the chamfer's pull outwards")
         .add("curvature_weight", [](F& f) -> auto& { return f.training.weights.curvature; }, 0, 1e9, "curvature consistency (0: off)")
         .add("chamfer_queries", [](F& f) -> auto& { return f.training.chamfer_queries; }, 0, 60000, "points of M_NeuS per step")
         .add("strand_width", [](F& f) -> auto& { return f.training.strand_width; }, 0, 1,

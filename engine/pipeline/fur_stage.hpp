@@ -33,8 +33,10 @@ struct FurSettings {
   std::uint32_t resolution = 512;   // longer side of the rendered views (0: the photos')
   // Native-resolution patches (fur_patches.hpp): the side of the window of a photo each image step
   // renders at the photo's own resolution (0: the whole view at `resolution`), and how many fixed
-  // patches of each held-out view score the groom.
-  std::uint32_t patch = 384;
+  // patches of each held-out view score the groom. Off by default: on the scenes measured (a cat
+  // at 1024 px, a cat of other shading, hair width and noise at 512 px) they trained 2-3.6x slower
+  // and no better at 2 cm or 2 mm (docs/fur-stage.md, "Native-resolution patches").
+  std::uint32_t patch = 0;
   std::uint32_t held_out_patches = 4;
   // With patches: at most this many Gabor maps, the photo's and its halvings' (orientation_scales.hpp),
   // as many as the fur's length in the photo calls for (fur_resolution.hpp, gabor_scales_for).

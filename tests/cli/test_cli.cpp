@@ -496,13 +496,22 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   // fur, so auto would stop after the warm-up).
   {
     const Result truthful = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + body + " --set knowledge.preset=cat" +
-                                small + " --set fur.truth=all --set fur.curve_seconds=0.01 --set fur.select=trained --to fur --json");
+                                small + " --set fur.truth=all --set fur.curve_seconds=0.01 --set fur.select=trained --set fur.patch=40 --to fur --json");
     INFO(truthful.output);
     REQUIRE(truthful.code == 0);
     const nf::json runs = nf::json::parse(truthful.output.substr(truthful.output.find('[')));
     REQUIRE(runs.size() == 6);
     const nf::json& ts = runs[5]["summary"];
     CHECK(ts["truth"] == "all");
+    // Native-resolution patches (fur.patch=40): the views' targets went to disk and were scored on
+    // fixed patches of the held-out views; the store's files are gone with the stage.
+    REQUIRE(ts["views"].contains("patches"));
+    CHECK(ts["views"]["patches"]["size"] == 40);
+    CHECK(ts["views"]["patches"]["bytes_on_disk"].get<double>() > 0);
+    CHECK(ts["views"]["patches"]["held_out_patches"].get<int>() >= ts["views"]["held_out"].get<int>());
+    CHECK(ts["views"]["patches"]["gabor_scales"] == 1);  // the fur spans under a pixel: no halving
+    CHECK_FALSE(fs::exists(work / ".resume" / "fur" / "patches"));
+    CHECK_FALSE(fs::exists(work / ".resume" / "fur" / "held_out_patches"));
     CHECK(ts["roots_file"] == "fur/roots.npz");  // roots on the true body, not frames/roots.npz
     CHECK(nf::fur::read_roots(work / "fur" / "roots.npz").size() == 2500);
     CHECK(nf::io::read_hair(work / "fur" / "strands.hair").strand_count() == 2500);

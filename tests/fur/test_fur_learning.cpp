@@ -80,6 +80,14 @@ TEST_CASE("fur learning: strands lifted too far come back onto the fur, and phot
   CHECK(image_loss_weight(2.4, 4.8) == 0.0);
   CHECK(image_loss_weight(3.6, 4.8) == doctest::Approx(0.5));
   CHECK(image_loss_weight(4.8, 4.8) == 1.0);
+  // Gabor scales: a halving only while the fur spans 2 x 4.8 px in the halved photo.
+  CHECK(gabor_scales_for(2.9, 4.8, 3) == 1);   // the demo
+  CHECK(gabor_scales_for(10.9, 4.8, 3) == 1);  // a cat at 1024 px
+  CHECK(gabor_scales_for(19.2, 4.8, 3) == 2);
+  CHECK(gabor_scales_for(35, 4.8, 3) == 2);    // a cat at 2048 px
+  CHECK(gabor_scales_for(70, 4.8, 3) == 3);
+  CHECK(gabor_scales_for(70, 4.8, 2) == 2);
+  CHECK(gabor_scales_for(0, 4.8, 3) == 1);
   CHECK(image_loss_weight(0.1, 0.0) == 1.0);
   CHECK(trainer.warm_state() == nullptr);
   trainer.train(o.warm_steps);
