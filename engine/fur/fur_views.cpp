@@ -69,21 +69,7 @@ FurView make_fur_view(gpu::Context& gpu, const io::Scene& scene, std::uint32_t c
   const auto hi = [&](std::uint32_t v, double s, std::uint32_t n) { return std::uint32_t(std::min<double>(n, std::ceil(v * s) + options.margin_px)); };
   const std::uint32_t x0 = lo(bx0, sx), y0 = lo(by0, sy), x1 = hi(bx1, sx, W), y1 = hi(by1, sy, H);
 
-  // Summed-area tables of the Gabor field's doubled-angle vectors (confidence-weighted) and of the
-  // confidences: the coherence of any window in O(1).
-  const std::size_t SW = std::size_t(cam.width) + 1;
-  std::vector<double> sum_x(SW * (cam.height + 1), 0.0), sum_y(sum_x.size(), 0.0), sum_c(sum_x.size(), 0.0);
-  for (std::uint32_t y = 0; y < cam.height; ++y)
-    for (std::uint32_t x = 0; x < cam.width; ++x) {
-      const std::size_t i = std::size_t(y) * cam.width + x, at = (y + 1) * SW + x + 1;
-      const double a = gabor.orientation.pixels[i], c = gabor.confidence.pixels[i];
-      sum_x[at] = c * std::cos(2 * a) + sum_x[at - 1] + sum_x[at - SW] - sum_x[at - SW - 1];
-      sum_y[at] = c * std::sin(2 * a) + sum_y[at - 1] + sum_y[at - SW] - sum_y[at - SW - 1];
-      sum_c[at] = c + sum_c[at - 1] + sum_c[at - SW] - sum_c[at - SW - 1];
-    }
-  const auto box = [&](const std::vector<double>& t, std::uint32_t bx0_, std::uint32_t by0_, std::uint32_t bx1_, std::uint32_t by1_) {
-    return t[by1_ * SW + bx1_] - t[by0_ * SW + bx1_] - t[by1_ * SW + bx0_] + t[by0_ * SW + bx0_];
-  };
+  const orient::OrientationSums sums(gabor);  // the reliability of any window in O(1)
 
   FurView v;
   v.camera = camera;
@@ -128,12 +114,7 @@ FurView make_fur_view(gpu::Context& gpu, const io::Scene& scene, std::uint32_t c
       const std::uint32_t wy0 = std::min(py0, (py0 + py1) / 2 > half ? (py0 + py1) / 2 - half : 0u);
       const std::uint32_t wx1 = std::min(cam.width, std::max(px1, (px0 + px1) / 2 + half + 1));
       const std::uint32_t wy1 = std::min(cam.height, std::max(py1, (py0 + py1) / 2 + half + 1));
-      const double c_sum = box(sum_c, wx0, wy0, wx1, wy1);
-      if (c_sum > 0) {
-        const double coherence = std::hypot(box(sum_x, wx0, wy0, wx1, wy1), box(sum_y, wx0, wy0, wx1, wy1)) / c_sum;
-        const double noise = 2.0 / std::sqrt(double(wx1 - wx0) * double(wy1 - wy0));
-        v.gabor_confidence[o] = float(std::clamp((coherence - noise) / (1.0 - noise), 0.0, 1.0));
-      }
+      v.gabor_confidence[o] = float(sums.reliability(wx0, wy0, wx1, wy1));
     }
   double reliable = 0, fur_pixels = 0;
   for (std::uint64_t p = 0; p < n; ++p) reliable += double(v.orientation_weight[p]) * v.gabor_confidence[p], fur_pixels += v.orientation_weight[p];

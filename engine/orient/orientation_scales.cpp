@@ -7,35 +7,40 @@
 
 namespace nf::orient {
 
-std::vector<float> orientation_reliability(const OrientationMap& map, std::uint32_t window) {
+OrientationSums::OrientationSums(const OrientationMap& map) : stride_(std::size_t(map.orientation.width) + 1) {
   const std::uint32_t W = map.orientation.width, H = map.orientation.height;
-  // Summed-area tables of the confidence-weighted doubled-angle vectors and of the confidences:
-  // any window's coherence in O(1).
-  const std::size_t SW = std::size_t(W) + 1;
-  std::vector<double> sx(SW * (H + 1), 0.0), sy(sx.size(), 0.0), sc(sx.size(), 0.0);
+  const std::size_t S = stride_;
+  x_.assign(S * (H + 1), 0.0), y_.assign(x_.size(), 0.0), c_.assign(x_.size(), 0.0);
   for (std::uint32_t y = 0; y < H; ++y)
     for (std::uint32_t x = 0; x < W; ++x) {
-      const std::size_t i = std::size_t(y) * W + x, at = (y + 1) * SW + x + 1;
+      const std::size_t i = std::size_t(y) * W + x, at = (y + 1) * S + x + 1;
       const double a = map.orientation.pixels[i], c = map.confidence.pixels[i];
-      sx[at] = c * std::cos(2 * a) + sx[at - 1] + sx[at - SW] - sx[at - SW - 1];
-      sy[at] = c * std::sin(2 * a) + sy[at - 1] + sy[at - SW] - sy[at - SW - 1];
-      sc[at] = c + sc[at - 1] + sc[at - SW] - sc[at - SW - 1];
+      x_[at] = c * std::cos(2 * a) + x_[at - 1] + x_[at - S] - x_[at - S - 1];
+      y_[at] = c * std::sin(2 * a) + y_[at - 1] + y_[at - S] - y_[at - S - 1];
+      c_[at] = c + c_[at - 1] + c_[at - S] - c_[at - S - 1];
     }
-  const auto box = [&](const std::vector<double>& t, std::uint32_t x0, std::uint32_t y0, std::uint32_t x1, std::uint32_t y1) {
-    return t[y1 * SW + x1] - t[y0 * SW + x1] - t[y1 * SW + x0] + t[y0 * SW + x0];
-  };
-  const std::uint32_t half = window / 2;
+}
+
+double OrientationSums::box(const std::vector<double>& t, std::uint32_t x0, std::uint32_t y0, std::uint32_t x1, std::uint32_t y1) const {
+  return t[y1 * stride_ + x1] - t[y0 * stride_ + x1] - t[y1 * stride_ + x0] + t[y0 * stride_ + x0];
+}
+
+double OrientationSums::reliability(std::uint32_t x0, std::uint32_t y0, std::uint32_t x1, std::uint32_t y1) const {
+  const double c = box(c_, x0, y0, x1, y1);
+  if (!(c > 0)) return 0.0;
+  const double coherence = std::hypot(box(x_, x0, y0, x1, y1), box(y_, x0, y0, x1, y1)) / c;
+  const double noise = 2.0 / std::sqrt(double(x1 - x0) * double(y1 - y0));
+  return std::clamp((coherence - noise) / (1.0 - noise), 0.0, 1.0);
+}
+
+std::vector<float> orientation_reliability(const OrientationMap& map, std::uint32_t window) {
+  const std::uint32_t W = map.orientation.width, H = map.orientation.height, half = window / 2;
+  const OrientationSums sums(map);
   std::vector<float> out(std::size_t(W) * H, 0.f);
   for (std::uint32_t y = 0; y < H; ++y)
-    for (std::uint32_t x = 0; x < W; ++x) {
-      const std::uint32_t x0 = x > half ? x - half : 0, y0 = y > half ? y - half : 0;
-      const std::uint32_t x1 = std::min(W, x + half + 1), y1 = std::min(H, y + half + 1);
-      const double c = box(sc, x0, y0, x1, y1);
-      if (!(c > 0)) continue;
-      const double coherence = std::hypot(box(sx, x0, y0, x1, y1), box(sy, x0, y0, x1, y1)) / c;
-      const double noise = 2.0 / std::sqrt(double(x1 - x0) * double(y1 - y0));
-      out[std::size_t(y) * W + x] = float(std::clamp((coherence - noise) / (1.0 - noise), 0.0, 1.0));
-    }
+    for (std::uint32_t x = 0; x < W; ++x)
+      out[std::size_t(y) * W + x] = float(sums.reliability(x > half ? x - half : 0, y > half ? y - half : 0, std::min(W, x + half + 1),
+                                                             std::min(H, y + half + 1)));
   return out;
 }
 

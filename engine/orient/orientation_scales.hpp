@@ -21,7 +21,21 @@
 
 namespace nf::orient {
 
-// Per pixel of `map`, the reliability above; `window` odd or not, its half is window / 2.
+// Summed-area tables of a map's confidence-weighted doubled-angle vectors and of its confidences:
+// the reliability of any window in O(1).
+class OrientationSums {
+ public:
+  explicit OrientationSums(const OrientationMap& map);
+  // The reliability above of the window [x0, x1) x [y0, y1) (0 where it holds no confidence).
+  double reliability(std::uint32_t x0, std::uint32_t y0, std::uint32_t x1, std::uint32_t y1) const;
+
+ private:
+  double box(const std::vector<double>& table, std::uint32_t x0, std::uint32_t y0, std::uint32_t x1, std::uint32_t y1) const;
+  std::size_t stride_ = 1;
+  std::vector<double> x_, y_, c_;
+};
+
+// Per pixel of `map`, the reliability of the window centred on it; its half is window / 2.
 std::vector<float> orientation_reliability(const OrientationMap& map, std::uint32_t window);
 
 // The image halved by a 2 x 2 box (an odd last row or column keeps its own pixels); a mask pixel
