@@ -52,11 +52,11 @@ std::vector<std::string> variant_settings(const std::string& variant, const fs::
   if (variant == "truth_all") return {"fur.truth=all"};
   if (variant == "select_trained") return {"fur.select=trained"};  // the selection off
   if (variant == "lengths") return {"fur.length_lr=0.01"};         // lengths learned from the photos
-  if (variant == "patches_off") return {"fur.patch=0"};             // whole views at fur.resolution
+  if (variant == "patches") return {"fur.patch=384"};               // native-resolution patches (off by default)
   for (const char* loss : {"silhouette", "orientation", "direction", "chamfer", "penetration", "curvature", "envelope"})
     if (variant == std::string("no_") + loss) return {std::string("fur.") + loss + "_weight=0"};
   throw UsageError("NF_BENCH_FUR_VARIANTS: unknown variant '" + variant +
-                   "' (warm_off, truth_knowledge, truth_knowledge_file, truth_envelope, truth_all, select_trained, lengths, patches_off, no_silhouette, no_orientation, "
+                   "' (warm_off, truth_knowledge, truth_knowledge_file, truth_envelope, truth_all, select_trained, lengths, patches, no_silhouette, no_orientation, "
                    "no_direction, no_chamfer, no_penetration, no_curvature, no_envelope; join with '+')");
 }
 
@@ -100,7 +100,7 @@ json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
                                                       : std::vector<std::string>{"truth_all", "truth_knowledge", "warm_off", "no_silhouette", "no_orientation",
                                                                                  "no_direction", "no_chamfer", "no_penetration", "no_curvature",
                                                                                  "truth_knowledge_file", "truth_envelope",
-                                                                                 "truth_envelope+truth_knowledge_file", "select_trained", "lengths", "patches_off"});
+                                                                                 "truth_envelope+truth_knowledge_file", "select_trained", "lengths", "patches"});
   for (const std::string& v : variants) variant_settings(v, root);  // unknown names fail before any work
   for (const std::string& p : presets)
     if (p != "draft" && p != "default" && p != "paper") throw UsageError("NF_BENCH_FUR_PRESETS: unknown preset '" + p + "' (draft, default, paper)");

@@ -55,13 +55,19 @@ std::uint32_t FurPatches::add(std::uint32_t camera, const NativeTargets& t) {
   std::vector<Texel> row(W);
   const int fd = ::open(s.file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw InputError(system_error(s.file, "cannot write the view's native targets"));
+  const auto fail = [&](const char* what) {
+    const std::string message = system_error(s.file, what);
+    ::close(fd);
+    ::unlink(s.file.c_str());  // nothing half-written left behind
+    return InputError(message);
+  };
   for (std::uint32_t y = 0; y < H; ++y) {
     for (std::uint32_t x = 0; x < W; ++x) {
       const std::size_t i = std::size_t(y) * W + x;
       const std::uint8_t f = t.flags[i];
       const float a = std::clamp(t.angle[i], 0.f, float(M_PI));
       row[x] = {f, std::uint8_t(std::lround(std::clamp(t.confidence[i], 0.f, 1.f) * 255.f)),
-                std::uint16_t(std::min<long>(65535, std::lround(a / M_PI * 65536.0)))};
+                std::uint16_t(std::lround(a / M_PI * 65536.0) & 0xFFFF)};  // pi wraps to 0: angles are mod pi
       if (f & NativeTargets::kFur) ++fur[std::size_t(y / kTile) * s.tiles_x + x / kTile];
       if (f & NativeTargets::kOriented) {
         reliable += t.confidence[i], oriented += 1;
@@ -70,12 +76,13 @@ std::uint32_t FurPatches::add(std::uint32_t camera, const NativeTargets& t) {
       }
     }
     const std::size_t bytes = std::size_t(W) * sizeof(Texel);
-    if (::write(fd, row.data(), bytes) != ssize_t(bytes)) {
-      ::close(fd);
-      throw InputError(system_error(s.file, "cannot write the view's native targets (is the disk full?)"));
-    }
+    if (::write(fd, row.data(), bytes) != ssize_t(bytes)) throw fail("cannot write the view's native targets (is the disk full?)");
   }
-  if (::close(fd) != 0) throw InputError(system_error(s.file, "cannot write the view's native targets"));
+  if (::close(fd) != 0) {
+    const std::string message = system_error(s.file, "cannot write the view's native targets");
+    ::unlink(s.file.c_str());
+    throw InputError(message);
+  }
   bytes_ += std::uint64_t(W) * H * sizeof(Texel);
   s.reliability = oriented > 0 ? reliable / oriented : 0.0;
   s.tile_fur.resize(fur.size());
@@ -131,9 +138,9 @@ FurView FurPatches::cut(std::uint32_t view, const PatchPlace& p) const {
   const std::uint64_t n = v.pixels();
   v.mask.assign(n, 0.f), v.silhouette_weight.assign(n, 1.f), v.orientation_weight.assign(n, 0.f);
   v.gabor_angle.assign(n, 0.f), v.gabor_confidence.assign(n, 0.f);
+  std::vector<Texel> row(p.width);  // before the file is open: nothing to leak if it throws
   const int fd = ::open(s.file.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw InputError(system_error(s.file, "cannot read the view's native targets back"));
-  std::vector<Texel> row(p.width);
   const std::size_t bytes = std::size_t(p.width) * sizeof(Texel);
   for (std::uint32_t y = 0; y < p.height; ++y) {
     const off_t at = off_t((std::uint64_t(p.y0 + y) * s.crop.width + p.x0) * sizeof(Texel));

@@ -8,8 +8,9 @@
 // The views' native targets (fur_views.hpp, NativeTargets: mask, fur, orientation weight, the
 // multi-scale Gabor angle and its reliability) are computed once per view, written to a file of 4
 // bytes a pixel in `dir` and dropped from memory; a patch reads its rows back (pread), and M_bald's
-// depth is rasterised for the patch's camera. Memory stays a patch's, whatever the photos' size
-// and count; the files go when the store does (they are made anew from the photos on every run).
+// depth is rasterised for the patch's camera. During training memory stays a patch's, whatever the
+// photos' size and count (making one view's targets holds that photo's maps for a moment: a few
+// GB for 50 MP); the files go when the store does (they are made anew from the photos every run).
 //
 // Placement: a patch is centred on a pixel drawn with probability proportional to the fur in its
 // 16 x 16 tile (fur: mask and non-bald), then clamped into the view's crop, so every part of the

@@ -200,6 +200,11 @@ FurTrainer::FurTrainer(gpu::Context& context, const FurTrainingData& data, Stran
   double total = 0;
   for (float l : data.roots.length) total += l;
   mean_root_length_ = total / double(data.roots.size());
+  if (data.patches) {
+    NF_CHECK(data.patches->size() == data.train.size(), "fur: a patch store of other views than the training views");
+    for (std::uint32_t v = 0; v < data.train.size(); ++v)
+      NF_CHECK(data.patches->camera(v) == data.train[v].camera, "fur: a patch store of other views than the training views");
+  }
   for (std::uint32_t v = 0; v < data.train.size(); ++v) {
     const double px = fur_length_pixels(data.train[v], data.roots);
     resolution_.push_back({px, image_loss_weight(px, options_.resolved_fur_px)});

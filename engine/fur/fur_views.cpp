@@ -32,28 +32,10 @@ FurView make_fur_view(gpu::Context& gpu, const io::Scene& scene, std::uint32_t c
   if (nonbald && (nonbald->width != cam.width || nonbald->height != cam.height))
     throw InputError("fur: the non-bald mask of camera '" + cam.name + "' does not have the camera's size (rerun the defur stage)");
   const orient::OrientationMap gabor = orient::gabor_orientation(gpu, photo, &mask, options.gabor);
-  // The mask eroded by the outline band: a pixel stays when the (2r+1)^2 box around it lies in the
-  // photo and holds no pixel outside the mask (a chessboard distance of r), counted in O(1) with a
-  // summed-area table of the outside pixels.
+  // The mask eroded by the outline band: no orientation target where the filters see the outline.
   const int outline = options.outline_px >= 0 ? options.outline_px
                                               : int(std::ceil(options.gabor.support * std::max(options.gabor.sigma_x, options.gabor.sigma_y)));
-  std::vector<std::uint8_t> inner(mask.size(), 0);
-  {
-    const std::size_t TW = std::size_t(cam.width) + 1;
-    std::vector<std::uint32_t> outside(TW * (cam.height + 1), 0);
-    for (std::uint32_t y = 0; y < cam.height; ++y)
-      for (std::uint32_t x = 0; x < cam.width; ++x) {
-        const std::size_t at = (y + 1) * TW + x + 1;
-        outside[at] = (mask[std::size_t(y) * cam.width + x] ? 0u : 1u) + outside[at - 1] + outside[at - TW] - outside[at - TW - 1];
-      }
-    const auto r = std::uint32_t(std::max(0, outline));
-    for (std::uint32_t y = r; y + r < cam.height; ++y)
-      for (std::uint32_t x = r; x + r < cam.width; ++x) {
-        const std::size_t top = (y - r) * TW, bottom = (y + r + 1) * TW;
-        const std::uint32_t count = outside[bottom + x + r + 1] - outside[top + x + r + 1] - outside[bottom + x - r] + outside[top + x - r];
-        inner[std::size_t(y) * cam.width + x] = count == 0 ? 1 : 0;
-      }
-  }
+  const std::vector<std::uint8_t> inner = orient::eroded_mask(mask, cam.width, cam.height, std::uint32_t(std::max(0, outline)));
 
   // The rendering grid and the mask's box on it.
   const std::uint32_t side = std::max(cam.width, cam.height);
@@ -121,13 +103,14 @@ FurView make_fur_view(gpu::Context& gpu, const io::Scene& scene, std::uint32_t c
   v.orientation_reliability = fur_pixels > 0 ? reliable / fur_pixels : 0.0;
   v.body_depth = defur::camera_depth(gpu, bald, v.crop);
   if (native) {
-    const std::uint32_t nx0 = std::uint32_t(std::max(0, int(bx0) - int(options.margin_px))),
-                        ny0 = std::uint32_t(std::max(0, int(by0) - int(options.margin_px)));
-    const std::uint32_t nx1 = std::min(cam.width, bx1 + options.margin_px), ny1 = std::min(cam.height, by1 + options.margin_px);
+    // The same box as the view's crop: its margin counted in photo pixels.
+    const std::uint32_t margin = std::uint32_t(std::ceil(options.margin_px / v.scale));
+    const std::uint32_t nx0 = bx0 > margin ? bx0 - margin : 0, ny0 = by0 > margin ? by0 - margin : 0;
+    const std::uint32_t nx1 = std::min(cam.width, bx1 + margin), ny1 = std::min(cam.height, by1 + margin);
     const orient::ScaledOrientation scaled = orient::scaled_orientation(
         photo, mask, options.gabor_scales, options.coherence_px,
         [&](const io::Image& image, const std::vector<std::uint8_t>& m) { return orient::gabor_orientation(gpu, image, &m, options.gabor); },
-        &gabor);
+        std::uint32_t(std::max(0, outline)), &gabor);
     NativeTargets& t = *native;
     t.crop = scaled_crop(cam, 1, 1, nx0, ny0, nx1 - nx0, ny1 - ny0);
     const std::uint64_t count = t.pixels();

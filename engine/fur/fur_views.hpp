@@ -60,9 +60,9 @@ struct FurView {
   std::uint64_t pixels() const { return std::uint64_t(crop.width) * crop.height; }
 };
 
-// The view's targets at the photo's own resolution over the same box as the view's crop (grown by
-// margin_px photo pixels): what native-resolution patches are cut from (fur_patches.hpp). At that
-// resolution the mask, the fur and the orientation weight are binary.
+// The view's targets at the photo's own resolution over the same box as the view's crop (the mask's
+// box grown by margin_px rendering pixels): what native-resolution patches are cut from
+// (fur_patches.hpp). At that resolution the mask, the fur and the orientation weight are binary.
 struct NativeTargets {
   io::Camera crop;  // the camera cropped to the box, at scale 1
   enum Flag : std::uint8_t { kMask = 1, kFur = 2, kOriented = 4 };  // kFur: mask and non-bald; kOriented: fur away from the outline

@@ -34,11 +34,12 @@ void set_surface_inputs(FurTrainingData& data, const geometry::Mesh& outer, cons
   data.lo = b.lo - glm::vec3(longest), data.hi = b.hi + glm::vec3(longest);
   data.scene_radius = 0.5 * double(glm::length(b.hi - b.lo));
   // M_NeuS's signed distance, negated (positive inside): the penetration kernel on it penalises
-  // strand points beyond M_NeuS. The band reaches the longest strand, so a tip anywhere outside
-  // is pulled back (beyond the band the distance is clamped and pulls no more).
+  // strand points beyond M_NeuS. The band reaches the longest strand at the default largest
+  // length factor (LengthFactorBounds: 2.5), so a tip anywhere outside is pulled back (beyond the
+  // band the distance is clamped and pulls no more).
   geometry::SdfOptions sdf_options;
   sdf_options.resolution = 128;
-  sdf_options.band = longest + 3.f * b.longest() / float(sdf_options.resolution - 1);
+  sdf_options.band = float(LengthFactorBounds{}.hi) * longest + 3.f * b.longest() / float(sdf_options.resolution - 1);
   const geometry::SignedDistanceGrid sdf = geometry::signed_distance_grid(outer, sdf_options, "M_NeuS");
   data.envelope_sdf = {sdf.grid, sdf.band, sdf.distance};
   for (float& v : data.envelope_sdf.values) v = -v;

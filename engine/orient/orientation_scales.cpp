@@ -27,9 +27,9 @@ double OrientationSums::box(const std::vector<double>& t, std::uint32_t x0, std:
 
 double OrientationSums::reliability(std::uint32_t x0, std::uint32_t y0, std::uint32_t x1, std::uint32_t y1) const {
   const double c = box(c_, x0, y0, x1, y1);
-  if (!(c > 0)) return 0.0;
-  const double coherence = std::hypot(box(x_, x0, y0, x1, y1), box(y_, x0, y0, x1, y1)) / c;
   const double noise = 2.0 / std::sqrt(double(x1 - x0) * double(y1 - y0));
+  if (!(c > 0) || !(noise < 1)) return 0.0;
+  const double coherence = std::hypot(box(x_, x0, y0, x1, y1), box(y_, x0, y0, x1, y1)) / c;
   return std::clamp((coherence - noise) / (1.0 - noise), 0.0, 1.0);
 }
 
@@ -70,8 +70,30 @@ std::vector<std::uint8_t> halve_mask(const std::vector<std::uint8_t>& mask, std:
   return h;
 }
 
+std::vector<std::uint8_t> eroded_mask(const std::vector<std::uint8_t>& mask, std::uint32_t width, std::uint32_t height,
+                                      std::uint32_t radius) {
+  // A summed-area table of the unset pixels: any box's count in O(1).
+  const std::size_t TW = std::size_t(width) + 1;
+  std::vector<std::uint32_t> outside(TW * (height + 1), 0);
+  for (std::uint32_t y = 0; y < height; ++y)
+    for (std::uint32_t x = 0; x < width; ++x) {
+      const std::size_t at = (y + 1) * TW + x + 1;
+      outside[at] = (mask[std::size_t(y) * width + x] ? 0u : 1u) + outside[at - 1] + outside[at - TW] - outside[at - TW - 1];
+    }
+  std::vector<std::uint8_t> inner(mask.size(), 0);
+  for (std::uint32_t y = radius; y + radius < height; ++y)
+    for (std::uint32_t x = radius; x + radius < width; ++x) {
+      const std::size_t top = (y - radius) * TW, bottom = (y + radius + 1) * TW;
+      const std::uint32_t count =
+          outside[bottom + x + radius + 1] - outside[top + x + radius + 1] - outside[bottom + x - radius] + outside[top + x - radius];
+      inner[std::size_t(y) * width + x] = count == 0 ? 1 : 0;
+    }
+  return inner;
+}
+
 ScaledOrientation scaled_orientation(const io::Image& image, const std::vector<std::uint8_t>& mask, std::uint32_t scales,
-                                     std::uint32_t window, const OrientationOf& orientation_of, const OrientationMap* finest) {
+                                     std::uint32_t window, const OrientationOf& orientation_of, std::uint32_t outline,
+                                     const OrientationMap* finest) {
   if (scales < 1) throw InputError("orientation scales: at least one scale is needed (got 0)");
   if (mask.size() != std::size_t(image.width) * image.height)
     throw InputError("orientation scales: the mask has " + std::to_string(mask.size()) + " pixels, the image " +
@@ -84,15 +106,18 @@ ScaledOrientation scaled_orientation(const io::Image& image, const std::vector<s
   std::vector<std::uint8_t> level_mask = mask;
   for (std::uint32_t s = 0; s < scales; ++s) {
     if (s > 0) {
-      if (std::min(level.width, level.height) < 32) break;  // the halved side would fall below 16 px
+      if ((std::min(level.width, level.height) + 1) / 2 < 16) break;  // the halved side would fall below 16 px
       level_mask = halve_mask(level_mask, level.width, level.height);
       level = halve(level);
     }
     const OrientationMap map = s == 0 && finest ? *finest : orientation_of(level, level_mask);
     const std::vector<float> reliability = orientation_reliability(map, window);
+    const std::vector<std::uint8_t> away = s > 0 && outline > 0 ? eroded_mask(level_mask, level.width, level.height, outline)
+                                                                 : std::vector<std::uint8_t>{};
     for (std::uint32_t y = 0; y < image.height; ++y)
       for (std::uint32_t x = 0; x < image.width; ++x) {
         const std::size_t i = std::size_t(y) * image.width + x, at = std::size_t(y >> s) * level.width + (x >> s);
+        if (!away.empty() && !away[at]) continue;
         if (reliability[at] > out.reliability[i])
           out.reliability[i] = reliability[at], out.angle[i] = map.orientation.pixels[at], out.scale[i] = std::uint8_t(s);
       }

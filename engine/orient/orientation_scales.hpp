@@ -26,7 +26,8 @@ namespace nf::orient {
 class OrientationSums {
  public:
   explicit OrientationSums(const OrientationMap& map);
-  // The reliability above of the window [x0, x1) x [y0, y1) (0 where it holds no confidence).
+  // The reliability above of the window [x0, x1) x [y0, y1) (0 where it holds no confidence, and
+  // for windows of 4 pixels or fewer, where as many random orientations look coherent).
   double reliability(std::uint32_t x0, std::uint32_t y0, std::uint32_t x1, std::uint32_t y1) const;
 
  private:
@@ -53,10 +54,18 @@ struct ScaledOrientation {
 using OrientationOf = std::function<OrientationMap(const io::Image& image, const std::vector<std::uint8_t>& mask)>;
 
 // `scales` >= 1 scales (halving stops when a side would fall below 16 px). `finest`: the image's
-// own map when the caller has it already (not recomputed). InputError for scales 0 or a mask of
-// the wrong size.
+// own map when the caller has it already (not recomputed). A coarser scale may win only at least
+// `outline` of its own pixels inside its mask (outline x 2^s image pixels): nearer, its filters
+// answer the mask's edge against the background, which is more coherent than any fur; the image's
+// own scale near the outline is the caller's to mask. InputError for scales 0 or a mask of the
+// wrong size.
 ScaledOrientation scaled_orientation(const io::Image& image, const std::vector<std::uint8_t>& mask, std::uint32_t scales,
-                                     std::uint32_t window, const OrientationOf& orientation_of,
+                                     std::uint32_t window, const OrientationOf& orientation_of, std::uint32_t outline = 0,
                                      const OrientationMap* finest = nullptr);
+
+// The mask eroded by `radius` pixels: set where the (2 radius + 1)^2 box around the pixel lies in
+// the image and holds no unset pixel.
+std::vector<std::uint8_t> eroded_mask(const std::vector<std::uint8_t>& mask, std::uint32_t width, std::uint32_t height,
+                                      std::uint32_t radius);
 
 }  // namespace nf::orient

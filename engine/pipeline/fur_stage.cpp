@@ -277,7 +277,8 @@ json make_views(StageContext& c, const FurSettings& s, FurInputs& in, const fs::
   make(held_ids, in.data.held_out, held_store.get());
   if (held_store)
     for (std::uint32_t h = 0; h < held_store->size(); ++h)
-      for (const fur::PatchPlace& p : held_store->places(h, s.held_out_patches, splitmix64(s.training.seed + 7 + h)))
+      // Seeded by the camera alone: runs of other seeds are scored on the same patches.
+      for (const fur::PatchPlace& p : held_store->places(h, s.held_out_patches, splitmix64(0x5eedull + held_store->camera(h))))
         in.data.held_out_patches.push_back(held_store->cut(h, p));
   std::uint64_t rendered = 0, full = 0;
   double reliability = 0;

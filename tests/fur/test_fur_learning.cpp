@@ -181,8 +181,9 @@ TEST_CASE("fur learning: strands lifted too far come back onto the fur, and phot
   }
   CHECK(moved > 1e-3);
   {
-    // The knowledge here is the truth (factor 1): the chamfer from M_NeuS pulls the lengths out and
-    // the envelope loss pulls them back, so they stay near 1 (with the chamfer alone they grew).
+    // The knowledge here is the truth (factor 1). The chamfer from M_NeuS pulls the lengths out; the
+    // envelope loss does not stop a longer strand that lies flatter, so they still grow (1.27; 1.30
+    // without the envelope loss), which is why they are off by default. Reported, and bounded.
     double log_sum = 0;
     std::size_t regions = 0;
     std::vector<std::size_t> count(trainer.field().length_factors().size(), 0);
@@ -191,6 +192,8 @@ TEST_CASE("fur learning: strands lifted too far come back onto the fur, and phot
       if (count[r]) log_sum += std::log(trainer.field().length_factors()[r]), ++regions;
     const double geometric_mean = std::exp(log_sum / double(std::max<std::size_t>(1, regions)));
     MESSAGE("length factors' geometric mean over the regions with roots: ", geometric_mean);
+    CHECK(geometric_mean > 1.0);  // the bias documented above; a fix that ends it should say so here
+    CHECK(geometric_mean < o.length_bounds.hi);
   }
   // set_state returns to the warm-up's groom: the same strands as then.
   {

@@ -82,7 +82,8 @@ TEST_CASE("fur patches: a patch reads back the stored targets at the view's came
         REQUIRE(v.mask[o] == ((f & NativeTargets::kMask) ? 1.f : 0.f));
         REQUIRE(v.silhouette_weight[o] == ((f & NativeTargets::kMask) && !(f & NativeTargets::kFur) ? 0.f : 1.f));
         REQUIRE(v.orientation_weight[o] == ((f & NativeTargets::kOriented) ? 1.f : 0.f));
-        REQUIRE(std::abs(v.gabor_angle[o] - t.angle[i]) <= 1e-4f);
+        const double d = std::abs(double(v.gabor_angle[o]) - t.angle[i]);
+        REQUIRE(std::min(d, M_PI - d) <= M_PI / 131072 + 1e-6);  // half a step of 65,536 over pi, mod pi
         REQUIRE(std::abs(v.gabor_confidence[o] - t.confidence[i]) <= 0.5f / 255.f + 1e-6f);
         REQUIRE(v.body_depth[o] == doctest::Approx(2.0).epsilon(1e-4));  // the wall, seen through the patch's camera
       }

@@ -123,3 +123,46 @@ TEST_CASE("orientation scales: halving averages 2 x 2 boxes, keeps an odd edge, 
 }
 
 }  // namespace nf::orient
+
+namespace nf::orient {
+
+TEST_CASE("orientation scales: three scales on odd sizes, the photo's own map reused, and no coarse scale at the outline") {
+  // Stripes four times the filters' period inside a disc, flat grey outside: the halved-twice map
+  // resolves the stripes; near the disc's edge every scale also sees the edge itself.
+  const std::uint32_t w = 131, h = 127;
+  io::Image image{w, h, 1, std::vector<float>(std::size_t(w) * h, 0.5f)};
+  std::vector<std::uint8_t> mask(image.pixels.size(), 0);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> noise(-0.3f, 0.3f);
+  for (std::uint32_t y = 0; y < h; ++y)
+    for (std::uint32_t x = 0; x < w; ++x) {
+      if (std::hypot(x - 65.0, y - 63.0) > 55) continue;
+      const std::size_t i = std::size_t(y) * w + x;
+      mask[i] = 1;
+      const double across = x * std::sin(60 * kDeg) + y * std::cos(60 * kDeg);
+      image.pixels[i] = float(0.5 + 0.5 * std::cos(2 * kPi * across / 17.4)) + noise(rng);
+    }
+  const OrientationMap own = cpu_map(image, mask);
+  const ScaledOrientation guarded = scaled_orientation(image, mask, 3, 9, cpu_map, 8);
+  const ScaledOrientation reused = scaled_orientation(image, mask, 3, 9, cpu_map, 8, &own);
+  CHECK(reused.angle == guarded.angle);  // the map passed in is the one it would have made
+  CHECK(reused.scale == guarded.scale);
+  const ScaledOrientation open = scaled_orientation(image, mask, 3, 9, cpu_map, 0);
+  const std::vector<std::uint8_t> inside = eroded_mask(mask, w, h, 8), deep = eroded_mask(mask, w, h, 30);
+  std::size_t coarse_near_edge_open = 0, coarse_interior = 0, interior = 0;
+  for (std::size_t i = 0; i < mask.size(); ++i) {
+    REQUIRE(guarded.scale[i] <= 2);
+    if (!mask[i]) continue;
+    if (!inside[i]) {
+      REQUIRE(guarded.scale[i] == 0);  // within 8 px of the outline: the photo's own scale
+      coarse_near_edge_open += open.scale[i] > 0;
+    } else if (deep[i]) {
+      ++interior, coarse_interior += guarded.scale[i] == 2;
+    }
+  }
+  MESSAGE("near the outline without the guard, ", coarse_near_edge_open, " pixels took a coarse scale");
+  CHECK(coarse_near_edge_open > 0);                           // what the guard prevents
+  CHECK(double(coarse_interior) / double(interior) > 0.8);    // the wide stripes, read twice halved
+}
+
+}  // namespace nf::orient

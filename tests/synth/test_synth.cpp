@@ -327,7 +327,7 @@ TEST_CASE("the photos' look: shading models, hair width and sensor noise change 
     brightest_matte = std::max(brightest_matte, double(matte.rgb.pixels[p]));
   }
   CHECK(differ / sum(kk.coverage) > 0.02);  // per covered pixel and channel
-  CHECK(brightest_kk > brightest_matte);     // a highlight only adds light
+  CHECK(brightest_kk > brightest_matte);     // the highlight outshines matte's slightly stronger diffuse term
   // Twice the width covers about twice the pixels.
   CHECK(sum(wide.coverage) == doctest::Approx(2 * sum(kk.coverage)).epsilon(0.15));
   CHECK_THROWS_AS(synth::hair_shading_from("phong"), UsageError);
