@@ -107,10 +107,25 @@ FurView make_fur_view(gpu::Context& gpu, const io::Scene& scene, std::uint32_t c
     const std::uint32_t margin = std::uint32_t(std::ceil(options.margin_px / v.scale));
     const std::uint32_t nx0 = bx0 > margin ? bx0 - margin : 0, ny0 = by0 > margin ? by0 - margin : 0;
     const std::uint32_t nx1 = std::min(cam.width, bx1 + margin), ny1 = std::min(cam.height, by1 + margin);
+    // The scales are chosen on the box only, padded by what the coarsest scale's filters read (the
+    // band-pass and the bank, 2^(scales - 1) photo pixels each), so they see what they would in
+    // the whole photo: no work on the photo's pixels far from the animal.
+    const std::uint32_t reach = options.gabor_scales > 1 ? std::uint32_t(orient::gaussian_half_taps(options.gabor.dog_high_sigma).size() +
+                                                                         std::size_t(orient::make_gabor_bank(options.gabor).radius))
+                                                                << (options.gabor_scales - 1)
+                                                          : 0u;
+    // (The corner on the coarsest scale's grid, so the halvings pair the pixels the photo's would.)
+    const std::uint32_t grid = ~((1u << (std::max(1u, options.gabor_scales) - 1)) - 1u);
+    const std::uint32_t px0 = (nx0 > reach ? nx0 - reach : 0) & grid, py0 = (ny0 > reach ? ny0 - reach : 0) & grid;
+    const std::uint32_t px1 = std::min(cam.width, nx1 + reach), py1 = std::min(cam.height, ny1 + reach), pw = px1 - px0;
+    std::vector<std::uint8_t> padded_mask(std::size_t(pw) * (py1 - py0));
+    for (std::uint32_t y = py0; y < py1; ++y)
+      std::copy_n(mask.begin() + std::ptrdiff_t(std::size_t(y) * cam.width + px0), pw, padded_mask.begin() + std::ptrdiff_t(std::size_t(y - py0) * pw));
+    const orient::OrientationMap padded_gabor{io::crop(gabor.orientation, px0, py0, px1, py1), io::crop(gabor.confidence, px0, py0, px1, py1)};
     const orient::ScaledOrientation scaled = orient::scaled_orientation(
-        photo, mask, options.gabor_scales, options.coherence_px,
+        io::crop(photo, px0, py0, px1, py1), padded_mask, options.gabor_scales, options.coherence_px,
         [&](const io::Image& image, const std::vector<std::uint8_t>& m) { return orient::gabor_orientation(gpu, image, &m, options.gabor); },
-        std::uint32_t(std::max(0, outline)), &gabor);
+        std::uint32_t(std::max(0, outline)), &padded_gabor);
     NativeTargets& t = *native;
     t.crop = scaled_crop(cam, 1, 1, nx0, ny0, nx1 - nx0, ny1 - ny0);
     const std::uint64_t count = t.pixels();
@@ -121,7 +136,8 @@ FurView make_fur_view(gpu::Context& gpu, const io::Scene& scene, std::uint32_t c
         const bool grows = !nonbald || nonbald->pixels[i * nonbald->channels] > 0.5f;
         t.flags[o] = std::uint8_t((mask[i] ? NativeTargets::kMask : 0) | (mask[i] && grows ? NativeTargets::kFur : 0) |
                                   (inner[i] && grows ? NativeTargets::kOriented : 0));
-        t.angle[o] = scaled.angle[i], t.confidence[o] = scaled.reliability[i], t.scale[o] = scaled.scale[i];
+        const std::size_t at = std::size_t(y + ny0 - py0) * pw + x + nx0 - px0;
+        t.angle[o] = scaled.angle[at], t.confidence[o] = scaled.reliability[at], t.scale[o] = scaled.scale[at];
       }
   }
   return v;

@@ -25,6 +25,7 @@
 #include "engine/io/view_split.hpp"
 #include "engine/io/strand_files.hpp"
 #include "engine/metrics/groom_scores.hpp"
+#include "engine/orient/orientation_scales.hpp"
 #include "engine/synth/synth_scene.hpp"
 #include "tests/support/gpu_test.hpp"
 
@@ -251,6 +252,31 @@ TEST_CASE("fur learning: strands lifted too far come back onto the fur, and phot
       CHECK(store.add(v, native) == patched.train.size() - 1);
     }
     patched.patches = &store;
+    {
+      // The native targets' scales are chosen on the mask's box padded by the filters' reach: the
+      // same angles, reliabilities and scales as on the whole photo.
+      FurViewOptions three = vo;
+      three.gabor_scales = 3;
+      three.outline_px = 0;  // no outline band: coarse scales win near the outline too, where they read beyond the box
+      NativeTargets native;
+      make_fur_view(ctx, scene, 0, nullptr, in.bald, three, &native);
+      const io::Camera& cam = scene.cameras[0];
+      const io::Image photo = io::read_image(cam.image);
+      const std::vector<std::uint8_t> mask = io::mask_of(io::read_image(cam.mask));
+      const orient::OrientationOf gabor = [&](const io::Image& i, const std::vector<std::uint8_t>& m) { return orient::gabor_orientation(ctx, i, &m); };
+      const orient::ScaledOrientation whole = orient::scaled_orientation(photo, mask, 3, three.coherence_px, gabor, 0);
+      const auto x0 = std::uint32_t(std::lround(cam.cx - native.crop.cx)), y0 = std::uint32_t(std::lround(cam.cy - native.crop.cy));
+      std::size_t coarse = 0;
+      for (std::uint32_t y = 0; y < native.crop.height; ++y)
+        for (std::uint32_t x = 0; x < native.crop.width; ++x) {
+          const std::size_t at = std::size_t(y) * native.crop.width + x, i = std::size_t(y + y0) * cam.width + x + x0;
+          REQUIRE(native.scale[at] == whole.scale[i]);
+          REQUIRE(native.angle[at] == doctest::Approx(whole.angle[i]).epsilon(1e-6));
+          REQUIRE(native.confidence[at] == doctest::Approx(whole.reliability[i]).epsilon(1e-6));
+          coarse += native.scale[at] > 0;
+        }
+      CHECK(coarse > 0);  // the comparison covers the coarse scales
+    }
     FurTrainer p(ctx, patched, *prior, {}, forced);
     p.train(forced.warm_steps + 2);
     const FurStepReport r = p.last_report();
