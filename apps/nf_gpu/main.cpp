@@ -491,7 +491,7 @@ int main(int argc, char** argv) {
   auto* edit = app.add_subcommand("edit", "re-infer and re-export the groom with per-region changes, without retraining");
   edit->add_option("--work", edit_work, "WORK folder of a finished reconstruct")->required();
   edit->add_option("--out", edit_out, "output folder (not inside WORK; created if needed)")->required();
-  edit->add_option("--set", edit_options.sets, "REGION.length_cm=X, REGION.thickness_cm=X or REGION.density=X (repeatable)");
+  edit->add_option("--set", edit_options.sets, "REGION.length_cm=X, REGION.hair_diameter_mm=X or REGION.density=X (repeatable)");
   edit->add_option("--shave", edit_options.shave, "a region to shave (repeatable)");
   edit->add_option("--strands", edit_strands, "re-sample this many roots over the fur first")->check(CLI::Range(1u, 40000000u));
   edit->add_option("--seed", edit_options.seed, "seed of new roots (default 1)");

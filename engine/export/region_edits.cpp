@@ -37,7 +37,7 @@ GroomEdits GroomEdits::parse(const std::vector<std::string>& sets, const std::ve
   for (const std::string& set : sets) {
     const std::size_t eq = set.find('='), dot = set.find('.');
     if (eq == std::string::npos || dot == std::string::npos || dot > eq)
-      throw UsageError("--set " + set + ": expected REGION.FIELD=VALUE (fields: length_cm, thickness_cm, density)");
+      throw UsageError("--set " + set + ": expected REGION.FIELD=VALUE (fields: length_cm, hair_diameter_mm, density)");
     const std::string field = set.substr(dot + 1, eq - dot - 1), text = set.substr(eq + 1);
     RegionEdit& r = e.regions[region_of(set.substr(0, dot), "--set " + set)];
     double value = 0;
@@ -53,9 +53,12 @@ GroomEdits GroomEdits::parse(const std::vector<std::string>& sets, const std::ve
         throw UsageError("--set " + set + ": " + field + " must lie in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
     };
     if (field == "length_cm") check(1e-3, 1e3), r.length_cm = value;
-    else if (field == "thickness_cm") check(1e-5, 10), r.thickness_cm = value;
+    else if (field == "hair_diameter_mm") check(knowledge::kMinHairMm, knowledge::kMaxHairMm), r.hair_diameter_mm = value;
     else if (field == "density") check(0, 100), r.density = value;
-    else throw UsageError("--set " + set + ": unknown field '" + field + "' (length_cm, thickness_cm, density)");
+    else if (field == "thickness_cm")  // the fur layer's depth is baked into M_bald; edit cannot change it
+      throw UsageError("--set " + set + ": thickness_cm is the fur layer's depth that defurring removed; change it in WORK/knowledge/"
+                       "knowledge.json and rerun `reconstruct --from defur`. The strands' width is hair_diameter_mm");
+    else throw UsageError("--set " + set + ": unknown field '" + field + "' (length_cm, hair_diameter_mm, density)");
   }
   for (const std::string& name : shave) e.regions[region_of(name, "--shave")].shave = true;
   return e;
@@ -69,7 +72,7 @@ json GroomEdits::to_json() const {
     if (e.empty()) continue;
     json j = json::object();
     if (e.length_cm) j["length_cm"] = *e.length_cm;
-    if (e.thickness_cm) j["thickness_cm"] = *e.thickness_cm;
+    if (e.hair_diameter_mm) j["hair_diameter_mm"] = *e.hair_diameter_mm;
     if (e.density) j["density"] = *e.density;
     if (e.shave) j["shave"] = true;
     by_region[std::string(body::kRegionNames[r])] = j;
@@ -118,11 +121,11 @@ fur::Roots edit_roots(const fur::Roots& roots, const GroomEdits& edits, const kn
   return out;
 }
 
-std::array<double, body::kRegionCount> region_thickness_cm(const knowledge::Knowledge& knowledge, const GroomEdits& edits) {
+std::array<double, body::kRegionCount> region_hair_diameter_mm(const knowledge::Knowledge& knowledge, const GroomEdits& edits) {
   std::array<double, body::kRegionCount> t{};
   for (int r = 0; r < body::kRegionCount; ++r) {
     const RegionEdit& e = edits.regions[std::size_t(r)];
-    t[std::size_t(r)] = e.thickness_cm ? *e.thickness_cm : knowledge.has(body::Region(r)) ? double(knowledge.at(body::Region(r)).thickness_cm) : 0.0;
+    t[std::size_t(r)] = e.hair_diameter_mm ? *e.hair_diameter_mm : double(knowledge.hair_diameter_mm_of(body::Region(r)));
   }
   return t;
 }

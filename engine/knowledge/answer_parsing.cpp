@@ -232,6 +232,7 @@ std::optional<double> length_text_cm(std::string s) {
   if (unit == "mm" || unit.rfind("millimet", 0) == 0) return v / 10.0;
   if (unit == "m" || unit.rfind("met", 0) == 0) return v * 100.0;
   if (unit == "in" || unit == "\"" || unit.rfind("inch", 0) == 0) return v * 2.54;
+  if (unit == "um" || unit == "\xc2\xb5m" || unit == "\xce\xbcm" || unit.rfind("micro", 0) == 0 || unit.rfind("micron", 0) == 0) return v / 1e4;
   return std::nullopt;
 }
 
@@ -467,13 +468,11 @@ RegionValues<glm::vec3> region_directions(const json& object, const std::string&
                                [](const json& v, const std::string& at) { return direction_of(v, at); });
 }
 
-double eye_distance_cm_of(const std::string& text, const std::string& where) {
-  for (const FoundObject& o : find_objects(text))
-    for (const auto& [key, value] : o.value.items())
-      if (key_has_any(key, {"eye", "distance"}) && (value.is_number() || value.is_string()))
-        return length_cm_of(value, where + ": " + key);
-  // Prose: the first number (or range) followed by a unit. A plain scan: a regex would recurse
-  // over an answer of megabytes.
+namespace {
+
+// The first number (or range) in prose followed by a unit of length, in cm. A plain scan: a regex
+// would recurse over an answer of megabytes.
+std::optional<double> first_length_cm_in_prose(const std::string& text) {
   for (std::size_t i = 0; i < text.size(); ++i) {
     if (!std::isdigit(static_cast<unsigned char>(text[i])) || (i > 0 && (std::isdigit(static_cast<unsigned char>(text[i - 1])) || text[i - 1] == '.')))
       continue;
@@ -493,13 +492,45 @@ double eye_distance_cm_of(const std::string& text, const std::string& where) {
     }
     skip_spaces(text, end);
     std::size_t word_end = end;
+    if (text.compare(end, 2, "\xc2\xb5") == 0 || text.compare(end, 2, "\xce\xbc") == 0) word_end += 2;  // micro sign, mu
     while (word_end < text.size() && std::isalpha(static_cast<unsigned char>(text[word_end]))) ++word_end;
     const std::string unit = to_lower(text.substr(end, word_end - end));
-    if (unit == "cm" || unit == "mm" || unit.rfind("centimet", 0) == 0 || unit.rfind("millimet", 0) == 0 ||
-        unit.rfind("inch", 0) == 0)
+    if (unit == "cm" || unit == "mm" || unit == "um" || unit == "\xc2\xb5m" || unit == "\xce\xbcm" || unit.rfind("centimet", 0) == 0 ||
+        unit.rfind("millimet", 0) == 0 || unit.rfind("micro", 0) == 0 || unit.rfind("inch", 0) == 0)
       if (const std::optional<double> cm = length_text_cm(text.substr(i, word_end - i))) return *cm;
   }
+  return std::nullopt;
+}
+
+}  // namespace
+
+double eye_distance_cm_of(const std::string& text, const std::string& where) {
+  for (const FoundObject& o : find_objects(text))
+    for (const auto& [key, value] : o.value.items())
+      if (key_has_any(key, {"eye", "distance"}) && (value.is_number() || value.is_string()))
+        return length_cm_of(value, where + ": " + key);
+  if (const std::optional<double> cm = first_length_cm_in_prose(text)) return *cm;
   throw InputError(where + ": the answer gives no distance in cm");
+}
+
+double hair_diameter_mm_of(const std::string& text, const std::string& where) {
+  for (const FoundObject& o : find_objects(text))
+    for (const auto& [key, value] : o.value.items())
+      if (key_has_any(key, {"diam", "hair", "width", "thick"})) {
+        if (value.is_number()) return number_of(value, where + ": " + key);  // the question asks for mm
+        if (value.is_string()) {
+          const std::string s = value.get<std::string>();
+          std::size_t pos = 0;
+          skip_spaces(s, pos);
+          const double plain = parse_number_prefix(s, pos);
+          skip_spaces(s, pos);
+          if (std::isfinite(plain) && pos == s.size()) return plain;
+          if (const std::optional<double> cm = length_text_cm(s)) return *cm * 10.0;  // a plain number was read above: this has a unit
+          throw InputError(where + ": " + key + " = '" + s + "' is not a diameter (expected a number of mm, e.g. 0.07)");
+        }
+      }
+  if (const std::optional<double> cm = first_length_cm_in_prose(text)) return *cm * 10.0;
+  throw InputError(where + ": the answer gives no diameter in mm");
 }
 
 }  // namespace nf::knowledge

@@ -57,5 +57,8 @@ RegionValues<glm::vec3> region_directions(const json& object, const std::string&
 // The eye distance in cm from an answer: a JSON field whose name has "eye" or "distance" in it, else
 // the first number with a unit (cm or mm) in the text. Throws InputError when there is none.
 double eye_distance_cm_of(const std::string& text, const std::string& where);
+// A hair's diameter in mm from the answer to the hair prompt: a JSON field (a bare number is mm) or
+// the first length with a unit in prose (mm, um, cm).
+double hair_diameter_mm_of(const std::string& text, const std::string& where);
 
 }  // namespace nf::knowledge

@@ -25,13 +25,18 @@ Consensus consensus(const std::vector<Knowledge>& samples) {
   for (const Knowledge& k : samples) eyes.push_back(k.eye_distance_cm);
   out.knowledge.eye_distance_cm = float(median(eyes));
   out.spread["eye_distance_cm"] = {*std::min_element(eyes.begin(), eyes.end()), *std::max_element(eyes.begin(), eyes.end())};
+  std::vector<double> hairs;
+  for (const Knowledge& k : samples) hairs.push_back(k.hair_diameter_mm);
+  out.knowledge.hair_diameter_mm = float(median(hairs));
+  out.spread["hair_diameter_mm"] = {*std::min_element(hairs.begin(), hairs.end()), *std::max_element(hairs.begin(), hairs.end())};
 
   for (int i = 0; i < body::kRegionCount; ++i) {
-    std::vector<double> lengths, thickness;
+    std::vector<double> lengths, thickness, region_hairs;
     glm::dvec3 sum(0.0);
     for (const Knowledge& k : samples) {
       const auto& e = k.regions[std::size_t(i)];
       if (!e) continue;
+      if (e->hair_diameter_mm) region_hairs.push_back(*e->hair_diameter_mm);
       lengths.push_back(e->length_cm);
       thickness.push_back(e->thickness_cm);
       sum += glm::dvec3(e->direction);
@@ -41,6 +46,7 @@ Consensus consensus(const std::vector<Knowledge>& samples) {
     RegionKnowledge r;
     r.length_cm = float(median(lengths));
     r.thickness_cm = std::min(r.length_cm, float(median(thickness)));
+    if (2 * region_hairs.size() > lengths.size()) r.hair_diameter_mm = float(median(region_hairs));
     const double agreement = glm::length(sum) / double(lengths.size());  // 1: all answers point the same way
     if (agreement > 1e-3) r.direction = glm::vec3(glm::normalize(sum));
     else r.direction = samples[0].regions[std::size_t(i)] ? samples[0].regions[std::size_t(i)]->direction : glm::vec3(0, -1, 0);

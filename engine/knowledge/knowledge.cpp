@@ -20,6 +20,11 @@ const RegionKnowledge& Knowledge::at(Region r) const {
   return *e;
 }
 
+float Knowledge::hair_diameter_mm_of(Region r) const {
+  const auto& e = regions[std::size_t(r)];
+  return e && e->hair_diameter_mm ? *e->hair_diameter_mm : hair_diameter_mm;
+}
+
 namespace {
 
 float finite_number(const json& j, const std::string& where, float lo, float hi) {
@@ -48,6 +53,8 @@ Knowledge knowledge_from_json(const json& j, const std::string& source) {
   if (k.source.empty()) k.source = "file";
   if (!j.contains("eye_distance_cm")) throw InputError(source + ": missing field 'eye_distance_cm'");
   k.eye_distance_cm = finite_number(j["eye_distance_cm"], source + ": eye_distance_cm", 0.01f, 1000.0f);
+  // Optional: files written before it existed read with the default.
+  if (j.contains("hair_diameter_mm")) k.hair_diameter_mm = finite_number(j["hair_diameter_mm"], source + ": hair_diameter_mm", kMinHairMm, kMaxHairMm);
   if (!j.contains("regions") || !j["regions"].is_object()) throw InputError(source + ": missing object 'regions'");
   for (const auto& [name, entry] : j["regions"].items()) {
     const std::string where = source + ": regions." + name;
@@ -71,6 +78,7 @@ Knowledge knowledge_from_json(const json& j, const std::string& source) {
     const float len = glm::length(r.direction);
     if (!(len > 1e-6f)) throw InputError(where + ".direction is the zero vector");
     r.direction /= len;
+    if (entry.contains("hair_diameter_mm")) r.hair_diameter_mm = finite_number(entry["hair_diameter_mm"], where + ".hair_diameter_mm", kMinHairMm, kMaxHairMm);
     k.regions[std::size_t(*region)] = r;
   }
   return k;
@@ -81,10 +89,15 @@ json knowledge_to_json(const Knowledge& k) {
   for (int i = 0; i < body::kRegionCount; ++i) {
     const auto& r = k.regions[std::size_t(i)];
     if (!r) continue;
-    regions[std::string(body::kRegionNames[std::size_t(i)])] = {
+    json& e = regions[std::string(body::kRegionNames[std::size_t(i)])] = {
         {"length_cm", r->length_cm}, {"thickness_cm", r->thickness_cm}, {"direction", {r->direction.x, r->direction.y, r->direction.z}}};
+    if (r->hair_diameter_mm) e["hair_diameter_mm"] = *r->hair_diameter_mm;
   }
-  return {{"animal", k.animal}, {"source", k.source}, {"eye_distance_cm", k.eye_distance_cm}, {"regions", regions}};
+  return {{"animal", k.animal},
+          {"source", k.source},
+          {"eye_distance_cm", k.eye_distance_cm},
+          {"hair_diameter_mm", k.hair_diameter_mm},
+          {"regions", regions}};
 }
 
 Knowledge read_knowledge(const std::filesystem::path& path) {
@@ -115,7 +128,8 @@ std::string region_table(const Knowledge& k) {
                   r->length_cm, r->thickness_cm, r->direction.x, r->direction.y, r->direction.z, r->length_cm > 0 ? "" : "  bald");
     out << line;
   }
-  std::snprintf(line, sizeof line, "eye distance %.2f cm; source %s\n", k.eye_distance_cm, k.source.c_str());
+  std::snprintf(line, sizeof line, "eye distance %.2f cm; a hair %.3f mm across; source %s\n", k.eye_distance_cm, k.hair_diameter_mm,
+                k.source.c_str());
   out << line;
   return out.str();
 }

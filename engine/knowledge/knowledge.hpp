@@ -1,6 +1,7 @@
 #pragma once
 // Per-region fur knowledge: length and effective thickness in cm and the growth
-// direction in the animal frame, for every region. Read from knowledge.json with every field
+// direction in the animal frame, for every region, and a hair's diameter (the exported strands'
+// width; the thickness is the fur layer's depth, which defurring removes). Read from knowledge.json with every field
 // validated (errors name the file, the region and the field), written atomically, and available
 // as built-in presets for the animals the paper annotates (assets/knowledge/, embedded at build).
 #include <array>
@@ -16,15 +17,22 @@
 
 namespace nf::knowledge {
 
+// A hair's diameter when the knowledge gives none: a cat's or dog's guard hair (0.04-0.12 mm).
+inline constexpr float kDefaultHairDiameterMm = 0.08f;
+// A hair is 5 um (fine underfur) to 5 mm (a porcupine's quill).
+inline constexpr float kMinHairMm = 0.005f, kMaxHairMm = 5.f;
+
 struct RegionKnowledge {
   float length_cm = 0, thickness_cm = 0;
   glm::vec3 direction{0, -1, 0};  // unit, animal frame
+  std::optional<float> hair_diameter_mm;  // the region's own (a mane's coarser hair); else the animal's
 };
 
 struct Knowledge {
   std::string animal;
   std::string source;  // "preset:<name>", "vlm:<model>" or "file"
   float eye_distance_cm = 0;
+  float hair_diameter_mm = kDefaultHairDiameterMm;  // a hair at its root, where no region says otherwise
   std::array<std::optional<RegionKnowledge>, body::kRegionCount> regions;
 
   // The region's entry; throws InputError naming the region when the file lacks it.
@@ -32,6 +40,8 @@ struct Knowledge {
   bool has(body::Region r) const { return regions[std::size_t(r)].has_value(); }
   // Bald: no entry or zero length.
   bool grows_fur(body::Region r) const { return has(r) && at(r).length_cm > 0; }
+  // A hair's diameter in the region (its own, else the animal's).
+  float hair_diameter_mm_of(body::Region r) const;
 };
 
 Knowledge knowledge_from_json(const json& j, const std::string& source);

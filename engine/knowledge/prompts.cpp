@@ -49,6 +49,11 @@ const std::vector<Prompt>& paper_prompts() {
        "Could you measure the distance between eyeballs in cm? You could also use the real-world  understanding of "
        "this animal class.",
        "one JSON object, {\"eye_distance_cm\": number}."},
+      // Not the paper's: the exported strands' width is a hair's, not the fur layer's depth.
+      {"hair",
+       "What is the diameter of a single hair of this animal's coat, at its root, in millimetres? Use the real-world "
+       "understanding of this animal class.",
+       "one JSON object, {\"hair_diameter_mm\": number}."},
   };
   return prompts;
 }

@@ -137,6 +137,7 @@ Annotation annotate_with_vlm(const ChatFunction& chat, const AnnotationImages& i
   Annotation out;
   PartialKnowledge k;
   std::optional<double> eye_cm;
+  double hair_mm = kDefaultHairDiameterMm;
   json messages = json::array({{{"role", "system"}, {"content", system_prompt()}}});
   bool first = true;
   for (const Prompt& prompt : paper_prompts()) {
@@ -187,6 +188,11 @@ Annotation annotate_with_vlm(const ChatFunction& chat, const AnnotationImages& i
           if (!v) throw InputError(at + ": the answer names no body region");
           note_unknown(v->unknown, "direction", out.warnings);
           for (const auto& [r, d] : v->values) k.direction[std::size_t(r)] = d;
+        } else if (prompt.step == "hair") {
+          const double mm = hair_diameter_mm_of(answer, at);
+          if (!(mm >= kMinHairMm && mm <= kMaxHairMm))
+            throw InputError(at + ": hair_diameter_mm = " + num(mm) + " is outside " + num(kMinHairMm) + "-" + num(kMaxHairMm) + " mm");
+          hair_mm = mm;
         } else {
           const double cm = eye_distance_cm_of(answer, at);
           if (!(cm >= kMinEyeCm && cm <= kMaxEyeCm))
@@ -195,6 +201,10 @@ Annotation annotate_with_vlm(const ChatFunction& chat, const AnnotationImages& i
         }
         break;
       } catch (const InputError& e) {
+        if (attempt > 0 && prompt.step == "hair") {  // only the export's widths hang on it
+          out.warnings.push_back("no usable hair diameter in the answers (" + std::string(e.what()) + "): " + num(kDefaultHairDiameterMm) + " mm");
+          break;
+        }
         if (attempt > 0) throw;
         const std::string message = e.what();
         const std::string problem = message.rfind(at + ": ", 0) == 0 ? message.substr(at.size() + 2) : message;
@@ -205,6 +215,7 @@ Annotation annotate_with_vlm(const ChatFunction& chat, const AnnotationImages& i
   }
   out.knowledge = fill_missing_regions(k, out.warnings, where);
   out.knowledge.eye_distance_cm = float(*eye_cm);
+  out.knowledge.hair_diameter_mm = float(hair_mm);
   return out;
 }
 

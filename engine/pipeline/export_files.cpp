@@ -118,9 +118,10 @@ json write_export(OutputFolder& folder, const GroomInput& g, const ExportScene& 
   for (std::size_t i = 0; i < n; ++i)
     if (g.root_face[i] >= body_export.triangle_count()) throw InputError("export: strand " + std::to_string(i) + "'s root face is not a face of M_bald");
 
-  // Widths: the region's thickness at the root (cm -> m), tapering linearly to tip_width of it.
+  // Widths: the region's hair diameter at the root (mm -> m) times width_scale, tapering linearly to
+  // tip_width of it.
   std::array<float, body::kRegionCount> root_width{};
-  for (int r = 0; r < body::kRegionCount; ++r) root_width[std::size_t(r)] = float(sc.thickness_cm[std::size_t(r)] / 100.0);
+  for (int r = 0; r < body::kRegionCount; ++r) root_width[std::size_t(r)] = float(sc.hair_diameter_mm[std::size_t(r)] / 1000.0 * o.width_scale);
   io::StrandStream s = exported_strands(g, sc, body_export, posed_export);
   const double taper = 1.0 - o.tip_width;
   s.width = [&g, &root_width, &s, taper](std::uint64_t i, std::uint32_t k) {
@@ -245,7 +246,7 @@ json write_export(OutputFolder& folder, const GroomInput& g, const ExportScene& 
               {"points", g.strands.points},
               {"files", files},
               {"frame", sc.frame.to_json()},
-              {"widths", {{"root", "the region's thickness_cm"}, {"tip_share", o.tip_width}, {"unit", "metre"}}},
+              {"widths", {{"root", "the region's hair_diameter_mm x width_scale"}, {"width_scale", o.width_scale}, {"tip_share", o.tip_width}, {"unit", "metre"}}},
               {"joints", sc.skeleton->joint_count()},
               {"posed", posed},
               {"previews", previews},

@@ -22,6 +22,7 @@ namespace nf::pipeline {
 struct ExportOptions {
   std::string formats = "usda,hair,ply,obj";  // groom files written (comma-separated)
   double tip_width = 0.1;                     // a strand's width at the tip, as a share of its root width
+  double width_scale = 1;                     // the root width as a multiple of a hair's diameter
   int turntable_frames = 12;                  // previews: frames around the animal (0: none)
   int compare_views = 3;                      // previews: held-out photos beside the groom's render (0: none)
   int preview_size = 384;                     // previews: longer side in pixels
@@ -43,7 +44,7 @@ struct ExportScene {
   const geometry::Mesh* bald_world = nullptr;  // M_bald, world (normals, regions)
   const io::Skeleton* skeleton = nullptr;      // export frame, bound to bald_world's vertices
   exporter::ExportFrame frame;
-  std::array<double, body::kRegionCount> thickness_cm{};  // strand width at the root, per region
+  std::array<double, body::kRegionCount> hair_diameter_mm{};  // a hair's diameter at the root, per region
   // Previews: the scene's cameras and which are held out (photo beside the render).
   const io::Scene* scene = nullptr;
   std::vector<std::uint32_t> compare_cameras;

@@ -36,7 +36,9 @@ const SettingsSchema<ExportOptions>& export_settings() {
   static const SettingsSchema<E> schema = [] {
     SettingsSchema<E> s("export", export_preset);
     s.text("formats", [](E& e) -> auto& { return e.formats; }, {}, "groom files, comma-separated: usda, hair, ply, obj")
-        .add("tip_width", [](E& e) -> auto& { return e.tip_width; }, 0, 1, "a strand's width at its tip as a share of the root's (the region's thickness)")
+        .add("tip_width", [](E& e) -> auto& { return e.tip_width; }, 0, 1, "a strand's width at its tip as a share of the root's")
+        .add("width_scale", [](E& e) -> auto& { return e.width_scale; }, 1e-3, 1e4,
+             "a strand's width at the root as a multiple of the knowledge's hair diameter (a guide strand drawn for many hairs may be wider)")
         .add("turntable_frames", [](E& e) -> auto& { return e.turntable_frames; }, 0, 360, "preview frames around the animal (0: none)")
         .add("compare_views", [](E& e) -> auto& { return e.compare_views; }, 0, 1000, "held-out photos shown beside the groom's render (0: none)")
         .add("preview_size", [](E& e) -> auto& { return e.preview_size; }, 16, 8192, "previews' longer side in pixels")
@@ -132,7 +134,7 @@ json ExportStage::run(StageContext& c, const fs::path& out_dir, const fs::path&)
   scene.frame = exporter::export_frame(read_animal_to_world(b), cm, bald);
   const io::Skeleton skeleton = exporter::transfer_rig(model, fit, bald, scene.frame);
   scene.skeleton = &skeleton;
-  scene.thickness_cm = exporter::region_thickness_cm(knowledge, {});
+  scene.hair_diameter_mm = exporter::region_hair_diameter_mm(knowledge, {});
   scene.scene = &c.scene;
   const int every = fur_settings().resolve(c.quality, c.settings.value("fur", json::object())).hold_out_every;
   for (std::uint32_t v = 0; v < c.scene.cameras.size(); ++v)

@@ -76,15 +76,15 @@ json run_edit(gpu::Context& context, const EditOptions& o) {
   scene.frame = read_export_frame(export_outputs(o.work));
   const io::Skeleton skeleton = read_export_skeleton(o.work, bald);
   scene.skeleton = &skeleton;
-  scene.thickness_cm = exporter::region_thickness_cm(knowledge, edits);
+  scene.hair_diameter_mm = exporter::region_hair_diameter_mm(knowledge, edits);
   const json exported = write_export(folder, groom, scene, export_options);
-  json thickness = json::object();
-  for (int r = 0; r < body::kRegionCount; ++r) thickness[std::string(body::kRegionNames[std::size_t(r)])] = scene.thickness_cm[std::size_t(r)];
+  json diameters = json::object();
+  for (int r = 0; r < body::kRegionCount; ++r) diameters[std::string(body::kRegionNames[std::size_t(r)])] = scene.hair_diameter_mm[std::size_t(r)];
   json record{{"work", fs::absolute(o.work).string()},
               {"edits", edits.to_json()},
               {"seed", o.seed},
               {"strands", {{"before", before}, {"after", n}}},
-              {"thickness_cm", thickness},
+              {"hair_diameter_mm", diameters},
               {"seconds", {{"inference", infer_seconds}, {"export", exported["seconds_total"]}, {"total", t_all.seconds()}}},
               {"export", exported}};
   write_file_atomic(folder.claim("edit.json"), record.dump(2) + "\n");

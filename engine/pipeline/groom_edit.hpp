@@ -17,7 +17,7 @@ namespace nf::pipeline {
 
 struct EditOptions {
   std::filesystem::path work, out;
-  std::vector<std::string> sets;   // REGION.length_cm=X, REGION.thickness_cm=X, REGION.density=X
+  std::vector<std::string> sets;   // REGION.length_cm=X, REGION.hair_diameter_mm=X, REGION.density=X
   std::vector<std::string> shave;  // regions
   std::optional<std::uint32_t> strands;
   std::string quality = "draft";   // the previews' preset

@@ -61,14 +61,14 @@ json run_pose(const PoseOptions& o) {
   scene.bald_world = &bald;
   scene.frame = read_export_frame(export_outputs(o.work));
   scene.skeleton = &skeleton;
-  scene.thickness_cm = exporter::region_thickness_cm(knowledge, {});
-  if (!o.groom.empty() && fs::exists(o.groom / "edit.json")) {  // the edit's thicknesses
+  scene.hair_diameter_mm = exporter::region_hair_diameter_mm(knowledge, {});
+  if (!o.groom.empty() && fs::exists(o.groom / "edit.json")) {  // the edit's hair diameters
     const json e = io::read_json_file(o.groom / "edit.json");
     for (int r = 0; r < body::kRegionCount; ++r) {
       const std::string name(body::kRegionNames[std::size_t(r)]);
-      const io::JsonField v = io::JsonField(e, (o.groom / "edit.json").string()).at("thickness_cm").at(name);
-      if (!(v.number() >= 0)) v.fail("expected a thickness of 0 or more");
-      scene.thickness_cm[std::size_t(r)] = v.number();
+      const io::JsonField v = io::JsonField(e, (o.groom / "edit.json").string()).at("hair_diameter_mm").at(name);
+      if (!(v.number() > 0)) v.fail("expected a diameter above 0");
+      scene.hair_diameter_mm[std::size_t(r)] = v.number();
     }
   }
   scene.skinning = exporter::skinning_transforms(skeleton, rotations);

@@ -403,6 +403,14 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   const nf::io::StrandSet exported = nf::io::read_hair(work / "export" / "fur.hair");
   CHECK(exported.strand_count() == 2500);
   CHECK(exported.thickness.size() == exported.point_count());
+  {  // Widths: a hair's diameter (mm -> m) at the root, not the fur layer's depth.
+    const nf::json k = nf::json::parse(std::ifstream(work / "knowledge" / "knowledge.json"));
+    const float hair_m = k["hair_diameter_mm"].get<float>() / 1000.f;
+    std::uint32_t at_hair = 0;
+    for (std::uint32_t i = 0; i < exported.strand_count(); ++i) at_hair += std::abs(exported.thickness[exported.offsets[i]] - hair_m) < 1e-3f * hair_m;
+    CHECK(at_hair == exported.strand_count());
+    CHECK(hair_m < 2e-4f);
+  }
   CHECK(nf::io::read_strands_ply(work / "export" / "fur.ply").regions.size() == 2500);
   CHECK(nf::io::read_strands_obj(work / "export" / "fur.obj").strand_count() == 2500);
   CHECK(nf::io::read_strands_usda(work / "export" / "fur.usda").points == exported.points);

@@ -36,7 +36,7 @@ knowledge::Knowledge knowledge_with(std::initializer_list<std::tuple<body::Regio
   k.animal = "test";
   k.source = "file";
   k.eye_distance_cm = 3;
-  for (const auto& [r, length, thickness] : entries) k.regions[std::size_t(r)] = knowledge::RegionKnowledge{length, thickness, {0, -1, 0}};
+  for (const auto& [r, length, thickness] : entries) k.regions[std::size_t(r)] = knowledge::RegionKnowledge{length, thickness, {0, -1, 0}, {}};
   return k;
 }
 

@@ -198,7 +198,10 @@ TEST_CASE("region edits: lengths scale, shave removes, density keeps or adds tha
   CHECK_THROWS_WITH_AS(GroomEdits::parse({"tail.lenght_cm=3"}, {}), doctest::Contains("unknown field"), UsageError);
   CHECK_THROWS_WITH_AS(GroomEdits::parse({"tail.length_cm=-1"}, {}), doctest::Contains("must lie in"), UsageError);
   CHECK_THROWS_WITH_AS(GroomEdits::parse({"tail.density=x"}, {}), doctest::Contains("not a number"), UsageError);
-  const auto widths = region_thickness_cm(k, GroomEdits::parse({"tail.thickness_cm=0.5"}, {}));
+  const auto widths = region_hair_diameter_mm(k, GroomEdits::parse({"tail.hair_diameter_mm=0.5"}, {}));
   CHECK(widths[std::size_t(tail)] == doctest::Approx(0.5));
-  CHECK(widths[std::size_t(back)] == doctest::Approx(k.at(body::Region::body).thickness_cm));
+  CHECK(widths[std::size_t(back)] == doctest::Approx(k.hair_diameter_mm));  // the animal's, not the layer's thickness
+  CHECK(k.hair_diameter_mm < 0.2f);
+  // The fur layer's depth is M_bald's; edit refuses it and says where it lives.
+  CHECK_THROWS_WITH_AS(GroomEdits::parse({"tail.thickness_cm=0.5"}, {}), doctest::Contains("rerun `reconstruct --from defur`"), UsageError);
 }

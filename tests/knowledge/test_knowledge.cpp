@@ -19,6 +19,9 @@ TEST_CASE("presets: every animal, every region, the paper's lengths") {
     CHECK(k.animal == animal);
     CHECK(k.source == "preset:" + animal);
     CHECK(k.eye_distance_cm > 1.0f);
+    // A hair, not the fur layer: tenths of a millimetre at most.
+    CHECK(k.hair_diameter_mm > 0.02f);
+    CHECK(k.hair_diameter_mm < 0.2f);
     for (int r = 0; r < body::kRegionCount; ++r) {
       const Region region = static_cast<Region>(r);
       if (region == Region::mane) continue;
@@ -38,6 +41,7 @@ TEST_CASE("presets: every animal, every region, the paper's lengths") {
   CHECK(preset("tiger").at(Region::mane).length_cm == doctest::Approx(7));
   CHECK(!preset("cat").has(Region::mane));
   CHECK(preset("lion").grows_fur(Region::mane));
+  CHECK(preset("lion").hair_diameter_mm_of(Region::mane) > preset("lion").hair_diameter_mm_of(Region::body));  // a mane's coarser hair
   CHECK_THROWS_WITH_AS(preset("unicorn"), doctest::Contains("presets: cat"), UsageError);
 }
 
@@ -48,13 +52,17 @@ TEST_CASE("knowledge.json round-trips") {
   const Knowledge r = read_knowledge(path);
   CHECK(r.animal == k.animal);
   CHECK(r.eye_distance_cm == k.eye_distance_cm);
+  CHECK(r.hair_diameter_mm == k.hair_diameter_mm);
   for (int i = 0; i < body::kRegionCount; ++i) {
     REQUIRE(r.regions[i].has_value() == k.regions[i].has_value());
     if (!k.regions[i]) continue;
     CHECK(r.regions[i]->length_cm == k.regions[i]->length_cm);
     CHECK(r.regions[i]->thickness_cm == k.regions[i]->thickness_cm);
     CHECK(glm::distance(r.regions[i]->direction, k.regions[i]->direction) < 1e-6f);
+    CHECK(r.regions[i]->hair_diameter_mm == k.regions[i]->hair_diameter_mm);
   }
+  write_knowledge(path, preset("lion"));
+  CHECK(*read_knowledge(path).at(Region::mane).hair_diameter_mm == doctest::Approx(0.15));
   std::filesystem::remove(path);
 }
 
@@ -82,6 +90,14 @@ TEST_CASE("bad knowledge names the region and the field") {
   j = base();
   j["regions"]["tail"]["direction"] = {0, "up", 0};
   CHECK_THROWS_WITH_AS(knowledge_from_json(j, "k.json"), doctest::Contains("direction[1]"), InputError);
+  // The hair's diameter is optional (files written before it existed), and checked when given.
+  CHECK(knowledge_from_json(base(), "k.json").hair_diameter_mm == kDefaultHairDiameterMm);
+  j = base();
+  j["hair_diameter_mm"] = 35.0;  // 3.5 cm: a fur layer's thickness, not a hair
+  CHECK_THROWS_WITH_AS(knowledge_from_json(j, "k.json"), doctest::Contains("hair_diameter_mm = 35"), InputError);
+  j = base();
+  j["regions"]["tail"]["hair_diameter_mm"] = 0.0;
+  CHECK_THROWS_WITH_AS(knowledge_from_json(j, "k.json"), doctest::Contains("regions.tail.hair_diameter_mm"), InputError);
   j = base();
   j.erase("eye_distance_cm");
   CHECK_THROWS_WITH_AS(knowledge_from_json(j, "k.json"), doctest::Contains("eye_distance_cm"), InputError);

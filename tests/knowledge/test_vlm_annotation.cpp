@@ -36,13 +36,13 @@ const AnnotationImages kImages{"data:image/jpeg;base64,AAAA", "data:image/jpeg;b
 
 }  // namespace
 
-TEST_CASE("the five prompts, one conversation, the photos first") {
+TEST_CASE("the paper's five prompts and the hair's, one conversation, the photos first") {
   ScriptedModel model;
   const Annotation a = annotate_with_vlm(std::ref(model), kImages, "test");
-  REQUIRE(model.requests.size() == 5);
-  CHECK(model.steps == std::vector<std::string>{"length", "thickness", "verify", "direction", "eyes"});
+  REQUIRE(model.requests.size() == 6);
+  CHECK(model.steps == std::vector<std::string>{"length", "thickness", "verify", "direction", "eyes", "hair"});
   // Each request carries everything before it: the system prompt, the questions and the answers.
-  for (std::size_t i = 0; i < 5; ++i) CHECK(model.requests[i].size() == 2 + 2 * i);
+  for (std::size_t i = 0; i < 6; ++i) CHECK(model.requests[i].size() == 2 + 2 * i);
   CHECK(model.requests[0][0]["role"] == "system");
   const json& first = model.requests[0][1]["content"];
   REQUIRE(first.is_array());
@@ -60,7 +60,27 @@ TEST_CASE("the five prompts, one conversation, the photos first") {
   CHECK(k.grows_fur(Region::mane));
   CHECK_FALSE(k.grows_fur(Region::eyes));
   CHECK(glm::length(k.at(Region::neck).direction) == doctest::Approx(1.0));
-  CHECK(a.requests == 5);
+  CHECK(k.hair_diameter_mm == doctest::Approx(0.06));
+  CHECK(a.requests == 6);
+}
+
+TEST_CASE("the hair's diameter: read in mm, um or prose; no usable answer keeps the default with a warning") {
+  CHECK(hair_diameter_mm_of(R"({"hair_diameter_mm": 0.07})", "hair") == doctest::Approx(0.07));
+  CHECK(hair_diameter_mm_of(R"({"diameter": "70 um"})", "hair") == doctest::Approx(0.07));
+  CHECK(hair_diameter_mm_of(R"({"diameter": "0.05"})", "hair") == doctest::Approx(0.05));
+  CHECK(hair_diameter_mm_of("A cat's guard hair is about 60 \xc2\xb5m across.", "hair") == doctest::Approx(0.06));
+  CHECK(hair_diameter_mm_of("Roughly 0.05-0.09 mm.", "hair") == doctest::Approx(0.07));
+  CHECK_THROWS_WITH_AS(hair_diameter_mm_of("I cannot tell.", "hair"), doctest::Contains("no diameter"), InputError);
+
+  ScriptedModel vague;
+  vague.answers["hair"] = "It depends on the breed.";
+  const Annotation a = annotate_with_vlm(std::ref(vague), kImages, "test");
+  CHECK(a.requests == 7);  // asked once more, then the default
+  CHECK(a.knowledge.hair_diameter_mm == doctest::Approx(kDefaultHairDiameterMm));
+  CHECK(std::any_of(a.warnings.begin(), a.warnings.end(), [](const std::string& w) { return w.find("no usable hair diameter") != std::string::npos; }));
+  ScriptedModel huge;
+  huge.answers["hair"] = R"({"hair_diameter_mm": 12})";  // a centimetre is no hair
+  CHECK(annotate_with_vlm(std::ref(huge), kImages, "test").knowledge.hair_diameter_mm == doctest::Approx(kDefaultHairDiameterMm));
 }
 
 TEST_CASE("an unusable answer is asked again once, then refused with the region and field") {
@@ -79,7 +99,7 @@ TEST_CASE("an unusable answer is asked again once, then refused with the region 
     return calls == 1 ? std::string("I think the fur is long.") : fixed(messages, step);
   };
   const Annotation a = annotate_with_vlm(chat, kImages, "test");
-  CHECK(a.requests == 6);
+  CHECK(a.requests == 7);
   CHECK(std::any_of(a.warnings.begin(), a.warnings.end(), [](const std::string& w) { return w.find("asked again") != std::string::npos; }));
 
   ScriptedModel zero;
@@ -125,10 +145,10 @@ TEST_CASE("consensus: median lengths, mean directions, flagged disagreement") {
   const float lengths[3] = {1.0f, 1.2f, 5.0f};
   for (int i = 0; i < 3; ++i) {
     samples[i].eye_distance_cm = 3.0f + float(i);
-    samples[i].regions[size_t(Region::body)] = RegionKnowledge{lengths[i], 0.3f, glm::normalize(glm::vec3(0.1f * float(i), -1, 0))};
-    samples[i].regions[size_t(Region::tail)] = RegionKnowledge{2.0f, 0.5f, glm::vec3(0, 0, -1)};
+    samples[i].regions[size_t(Region::body)] = RegionKnowledge{lengths[i], 0.3f, glm::normalize(glm::vec3(0.1f * float(i), -1, 0)), {}};
+    samples[i].regions[size_t(Region::tail)] = RegionKnowledge{2.0f, 0.5f, glm::vec3(0, 0, -1), {}};
   }
-  samples[0].regions[size_t(Region::mane)] = RegionKnowledge{9.0f, 3.0f, glm::vec3(0, -1, 0)};  // one in three: dropped
+  samples[0].regions[size_t(Region::mane)] = RegionKnowledge{9.0f, 3.0f, glm::vec3(0, -1, 0), {}};  // one in three: dropped
   const Consensus c = consensus(samples);
   CHECK(c.knowledge.at(Region::body).length_cm == doctest::Approx(1.2));
   CHECK(c.knowledge.eye_distance_cm == doctest::Approx(4.0));
@@ -213,7 +233,7 @@ TEST_CASE("the verification answer: each dict is the field named last before it;
   content.answers["verify"] = "Yes, I am confident the estimates are right.";
   a = annotate_with_vlm(std::ref(content), kImages, "test");
   CHECK(a.knowledge.at(Region::body).length_cm == doctest::Approx(1.0));  // the length answer's
-  CHECK(a.requests == 6);  // asked once more
+  CHECK(a.requests == 7);  // asked once more
   CHECK(std::any_of(a.warnings.begin(), a.warnings.end(), [](const std::string& w) { return w.find("earlier ones stand") != std::string::npos; }));
 
   ScriptedModel no_body;
