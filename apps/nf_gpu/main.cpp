@@ -6,6 +6,7 @@
 #include <fstream>
 #include <iostream>
 #include <optional>
+#include <set>
 
 #include "engine/bench/suites.hpp"
 #include "engine/body/quadruped.hpp"
@@ -17,6 +18,7 @@
 #include "engine/fur/prior_training.hpp"
 #include "engine/gpu/context.hpp"
 #include "engine/gradcheck/catalog.hpp"
+#include "engine/io/json_fields.hpp"
 #include "engine/metrics/metrics_report.hpp"
 #include "engine/knowledge/knowledge.hpp"
 #include "engine/pipeline/export_stage.hpp"
@@ -184,7 +186,8 @@ int run_bench(const nf::bench::Options& options, const std::string& json_path, b
   return 0;
 }
 
-// Runs the stages; on Ctrl-C prints how to resume and returns nullopt (the caller exits with 130).
+// Runs the stages; on Ctrl-C or SIGTERM prints how to resume and returns nullopt (the caller exits
+// with interrupted_exit_code().
 std::optional<std::vector<nf::pipeline::StageOutcome>> run_stages(nf::gpu::Context& context,
                                                                   const nf::pipeline::ReconstructOptions& options,
                                                                   const std::string& command_line) {
@@ -197,34 +200,44 @@ std::optional<std::vector<nf::pipeline::StageOutcome>> run_stages(nf::gpu::Conte
   }
 }
 
-// Where the export files are and how to open them (what reconstruct, edit and pose print last).
+// Where the export files are and how to open them (what reconstruct, edit and pose print last):
+// only the files this run wrote, as export.json lists them.
 void print_export_guide(const std::filesystem::path& dir) {
+  std::set<std::string> written;
+  for (const json& f : nf::io::read_json_file(dir / "export.json").value("files", json::array())) written.insert(f.value("file", ""));
   std::printf("groom and body in %s (metres, +y up, the animal facing +z):\n", dir.string().c_str());
-  std::printf("  fur.usda   curves + body in one USD file: Houdini (File > Import > USD), Unreal (USD Stage), Omniverse\n");
+  if (written.count("fur.usda"))
+    std::printf("  fur.usda   curves + body in one USD file: Houdini (File > Import > USD), Unreal (USD Stage), Omniverse\n");
   std::printf("  body.glb   rigged body: Blender (File > Import > glTF 2.0), Unreal (Import), Houdini (glTF ROP/SOP)\n");
-  std::printf("  fur.ply, fur.obj, fur.hair   the strands as polylines for any tool; fur.hair for Cem Yuksel's viewers\n");
-  std::printf("  Blender hair: blender -b -P tools/blender/nf_gpu_import.py -- %s (or install tools/blender as an add-on)\n",
-              dir.string().c_str());
-  std::printf("  previews: %s/turntable.png\n", dir.string().c_str());
+  for (const char* f : {"fur.ply", "fur.obj"})
+    if (written.count(f)) std::printf("  %s    the strands as polylines for any tool\n", f);
+  if (written.count("fur.hair")) {
+    std::printf("  fur.hair   Cem Yuksel's hair format; Blender hair curves through the add-on:\n");
+    std::printf("             blender -b -P tools/blender/nf_gpu_import.py -- %s (or install tools/blender as an add-on)\n",
+                dir.string().c_str());
+  }
+  if (std::filesystem::exists(dir / "turntable.png")) std::printf("  previews: %s/turntable.png\n", dir.string().c_str());
 }
 
 int run_reconstruct(const nf::pipeline::ReconstructOptions& options, bool as_json, bool profile,
                     const std::string& command_line) {
   nf::gpu::Context context;
   const auto ran = run_stages(context, options, command_line);
-  if (!ran) return int(nf::ExitCode::Interrupted);
+  if (!ran) return nf::interrupted_exit_code();
   const auto& outcomes = *ran;
   if (profile) print_profile(context);
   if (as_json) {
     json out = json::array();
-    for (const auto& o : outcomes)
+    for (const auto& o : outcomes) {
       out.push_back({{"stage", o.name}, {"ran", o.ran}, {"seconds", o.seconds}, {"summary", o.summary}});
+      if (!o.kept.empty()) out.back()["kept"] = o.kept;
+    }
     std::cout << out.dump(2) << "\n";
     return 0;
   }
   for (const auto& o : outcomes)
-    std::printf("%-10s %s%s\n", o.name.c_str(), o.ran ? "ran in " : "unchanged, skipped",
-                o.ran ? (std::to_string(o.seconds) + " s").c_str() : "");
+    std::printf("%-10s %s%s\n", o.name.c_str(), o.ran ? "ran in " : o.kept.empty() ? "unchanged, skipped" : "kept: ",
+                o.ran ? (std::to_string(o.seconds) + " s").c_str() : o.kept.c_str());
   std::printf("outputs in %s\n", options.work.string().c_str());
   if (std::any_of(outcomes.begin(), outcomes.end(), [](const auto& o) { return o.name == "export"; }))
     print_export_guide(nf::pipeline::export_outputs(options.work).dir);
@@ -235,7 +248,7 @@ int run_reconstruct(const nf::pipeline::ReconstructOptions& options, bool as_jso
 int run_annotate(const nf::pipeline::ReconstructOptions& options, bool as_json, const std::string& command_line) {
   nf::gpu::Context context;
   const auto ran = run_stages(context, options, command_line);
-  if (!ran) return int(nf::ExitCode::Interrupted);
+  if (!ran) return nf::interrupted_exit_code();
   const auto& outcomes = *ran;
   const nf::pipeline::KnowledgeOutputs out = nf::pipeline::knowledge_outputs(options.work);
   const nf::knowledge::Knowledge k = nf::knowledge::read_knowledge(out.knowledge());
@@ -304,6 +317,7 @@ int run_train_prior(const std::string& out, nf::fur::PriorTrainingOptions option
 
 int run_edit(const nf::pipeline::EditOptions& options, bool as_json) {
   nf::gpu::Context context;
+  nf::install_interrupt_handler();  // a stop removes this run's partial files (groom_edit.cpp)
   const json record = nf::pipeline::run_edit(context, options);
   if (as_json) {
     std::cout << record.dump(2) << "\n";
@@ -316,6 +330,7 @@ int run_edit(const nf::pipeline::EditOptions& options, bool as_json) {
 }
 
 int run_pose(const nf::pipeline::PoseOptions& options, bool as_json) {
+  nf::install_interrupt_handler();
   const json record = nf::pipeline::run_pose(options);
   if (as_json) {
     std::cout << record.dump(2) << "\n";
@@ -347,6 +362,7 @@ std::string quoted_command_line(int argc, char** argv) {
 int main(int argc, char** argv) {
   CLI::App app{"nf_gpu: furless body mesh and strand-based fur from multi-view photos, on Vulkan compute"};
   app.require_subcommand(1);
+  nf::ignore_file_size_signal();
   app.fallthrough();  // global flags such as --profile may follow the subcommand
   bool profile = false;
   app.add_flag("--profile", profile, "print GPU time per pass at exit");
@@ -511,6 +527,15 @@ int main(int argc, char** argv) {
   pose->add_option("--formats", pose_options.formats, "groom files, comma-separated (default usda,hair,ply,obj)");
   pose->add_flag("--json", pose_json, "print the record as JSON");
 
+  // `nf_gpu help [COMMAND]` and a bare `nf_gpu` print the help, as most tools do.
+  auto* help = app.add_subcommand("help", "this help, or a command's: nf_gpu help COMMAND");
+  std::string help_topic;
+  help->add_option("command", help_topic, "a command");
+  if (argc == 1) {
+    std::cout << app.help();
+    return int(nf::ExitCode::Usage);
+  }
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -519,6 +544,20 @@ int main(int argc, char** argv) {
   }
 
   try {
+    if (*help) {
+      if (help_topic.empty()) {
+        std::cout << app.get_formatter()->make_help(&app, "nf_gpu", CLI::AppFormatMode::Normal);  // app.help() is the selected command's
+        return 0;
+      }
+      for (CLI::App* sub : app.get_subcommands({}))
+        if (sub->get_name() == help_topic) {
+          std::cout << sub->help();
+          return 0;
+        }
+      std::vector<std::string> names;
+      for (CLI::App* sub : app.get_subcommands({})) names.push_back(sub->get_name());
+      throw nf::UsageError("help: no command '" + help_topic + "'" + nf::did_you_mean(help_topic, names) + " (commands: " + nf::join(names) + ")");
+    }
     if (*info) return run_info(info_json);
     if (*gradcheck) return run_gradcheck(kernel_name, gradcheck_json);
     if (*bench) return run_bench(bench_options, bench_json, profile);
@@ -568,6 +607,9 @@ int main(int argc, char** argv) {
       render_options.scene = render_scene, render_options.out = render_out;
       return run_render(render_options);
     }
+  } catch (const nf::Interrupted& e) {
+    std::cerr << "nf_gpu: " << e.what() << "\n";
+    return nf::interrupted_exit_code();
   } catch (const nf::Error& e) {
     std::cerr << "nf_gpu: error: " << e.what() << "\n";
     return int(e.code());

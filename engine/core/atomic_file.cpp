@@ -1,13 +1,30 @@
 #include "engine/core/atomic_file.hpp"
 
+#include <signal.h>
 #include <unistd.h>
 
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <random>
 
 #include "engine/core/error.hpp"
 
 namespace nf {
+
+namespace {
+
+constexpr std::string_view kTemporaryMark = ".tmp";
+
+// Why the last write failed, in words (a stream keeps no error of its own; errno is the system's).
+std::string write_failure(int error) {
+  if (error == EFBIG) return "the file-size limit was reached (ulimit -f)";
+  if (error == ENOSPC) return "the disk is full";
+  if (error == EDQUOT) return "the disk quota is used up";
+  return error ? std::strerror(error) : "an unknown error";
+}
+
+}  // namespace
 
 void write_file_atomic(const std::filesystem::path& path, const std::function<void(std::ostream&)>& write) {
   namespace fs = std::filesystem;
@@ -18,7 +35,7 @@ void write_file_atomic(const std::filesystem::path& path, const std::function<vo
   std::random_device rd;
   std::string tmp_name = ".";
   tmp_name += path.filename().string();
-  tmp_name += ".tmp";
+  tmp_name += kTemporaryMark;
   tmp_name += std::to_string(getpid());
   tmp_name += '-';
   tmp_name += std::to_string(rd());
@@ -26,10 +43,13 @@ void write_file_atomic(const std::filesystem::path& path, const std::function<vo
   try {
     {
       std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-      if (!out) throw InputError("cannot write '" + tmp.string() + "'");
+      if (!out) throw InputError("cannot write '" + tmp.string() + "': " + write_failure(errno));
+      errno = 0;
       write(out);
       out.flush();
-      if (!out) throw InputError("writing '" + path.string() + "' failed (disk full?)");
+      if (!out) throw InputError("writing '" + path.string() + "' failed: " + write_failure(errno) + "; nothing was left in its place");
+      out.close();
+      if (!out) throw InputError("writing '" + path.string() + "' failed: " + write_failure(errno) + "; nothing was left in its place");
     }
     fs::rename(tmp, path, ec);
     if (ec) throw InputError("cannot move '" + tmp.string() + "' to '" + path.string() + "': " + ec.message());
@@ -37,6 +57,26 @@ void write_file_atomic(const std::filesystem::path& path, const std::function<vo
     fs::remove(tmp, ec);
     throw;
   }
+}
+
+std::vector<std::string> remove_stale_temporaries(const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> removed;
+  std::error_code ec;
+  for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    // ".NAME.tmpPID-RANDOM"
+    const std::size_t mark = name.rfind(kTemporaryMark), dash = name.rfind('-');
+    if (name.empty() || name[0] != '.' || mark == std::string::npos || dash == std::string::npos || dash < mark) continue;
+    const std::string pid_text = name.substr(mark + kTemporaryMark.size(), dash - mark - kTemporaryMark.size());
+    const std::string random_text = name.substr(dash + 1);
+    const auto digits = [](const std::string& s) { return !s.empty() && s.find_first_not_of("0123456789") == std::string::npos; };
+    if (!digits(pid_text) || !digits(random_text) || pid_text.size() > 9) continue;
+    const pid_t pid = pid_t(std::stol(pid_text));
+    if (pid == getpid() || kill(pid, 0) == 0 || errno != ESRCH) continue;  // its writer may still be at work
+    if (fs::remove(e.path(), ec)) removed.push_back(name);
+  }
+  return removed;
 }
 
 void write_file_atomic(const std::filesystem::path& path, std::string_view content) {

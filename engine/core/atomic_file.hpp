@@ -5,6 +5,7 @@
 #include <functional>
 #include <ostream>
 #include <string_view>
+#include <vector>
 
 namespace nf {
 
@@ -12,5 +13,9 @@ namespace nf {
 // `path`. Throws InputError naming the path if it cannot be written; the temporary is removed.
 void write_file_atomic(const std::filesystem::path& path, const std::function<void(std::ostream&)>& write);
 void write_file_atomic(const std::filesystem::path& path, std::string_view content);
+
+// Removes the temporaries that killed runs left in `dir` (the names write_file_atomic gives them,
+// whose process no longer exists) and returns their names.
+std::vector<std::string> remove_stale_temporaries(const std::filesystem::path& dir);
 
 }  // namespace nf

@@ -7,10 +7,12 @@ namespace nf {
 namespace {
 
 std::atomic<bool> g_interrupted{false};
+std::atomic<int> g_signal{SIGINT};
 
 // The first SIGINT or SIGTERM asks for a clean stop; a second one of either kind ends the process
-// with the default action (signal and raise are async-signal-safe).
+// with the default action (signal and raise are async-signal-safe, as are lock-free atomics).
 extern "C" void on_interrupt(int sig) {
+  if (!g_interrupted.load()) g_signal.store(sig);
   if (g_interrupted.exchange(true)) {
     std::signal(sig, SIG_DFL);
     std::raise(sig);
@@ -30,6 +32,22 @@ void install_interrupt_handler() {
 
 bool interrupted() { return g_interrupted.load(std::memory_order_relaxed); }
 
-void set_interrupted(bool value) { g_interrupted.store(value); }
+void set_interrupted(bool value) {
+  g_signal.store(SIGINT);
+  g_interrupted.store(value);
+}
+
+int interrupted_exit_code() { return 128 + g_signal.load(); }
+
+void stop_if_interrupted(const std::string& what) {
+  if (interrupted()) throw Interrupted(what + ": stopped on request; no partial file is left, and the files of an earlier run stay as they were");
+}
+
+void ignore_file_size_signal() {
+  struct sigaction action {};
+  action.sa_handler = SIG_IGN;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGXFSZ, &action, nullptr);
+}
 
 }  // namespace nf

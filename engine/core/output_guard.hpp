@@ -2,10 +2,12 @@
 // Where commands write. An output never lies inside an input folder (after resolving `..` and
 // symlinks), and a command never replaces a file that nf_gpu did not write: each output folder
 // keeps a record (.nf_gpu_outputs) of the files nf_gpu wrote into it, and only those may be
-// replaced by a later run. One guard for every command that writes.
+// replaced by a later run. One guard for every command that writes. A folder holds one result:
+// finish() removes what an earlier run wrote there and this one did not.
 #include <filesystem>
 #include <set>
 #include <string>
+#include <vector>
 
 namespace nf {
 
@@ -16,8 +18,11 @@ bool path_inside(const std::filesystem::path& path, const std::filesystem::path&
 void refuse_output_inside(const std::filesystem::path& out, const std::filesystem::path& input_folder,
                           const std::string& option, const std::string& what);
 
-// InputError when `path` exists and is not a folder (an `--out` that names a file).
+// InputError when `path`, or a folder above it, exists and is not a folder (an `--out` that names
+// a file, or a path under one).
 void require_folder_or_absent(const std::filesystem::path& path, const std::string& option);
+// Creates the folder (and those above it); InputError naming the option and saying why it cannot.
+void create_output_folder(const std::filesystem::path& dir, const std::string& option);
 
 class OutputFolder {
  public:
@@ -28,13 +33,17 @@ class OutputFolder {
   // exists and nf_gpu did not write it here. The claim is recorded before the caller writes, so a
   // run killed mid-write may replace its own half-written file next time.
   std::filesystem::path claim(const std::string& name);
+  // After a successful run: removes the files an earlier run recorded that this run did not claim
+  // (another format, another view), so nothing stale sits beside the result. Returns their names.
+  std::vector<std::string> finish();
 
   static constexpr const char* kRecordName = ".nf_gpu_outputs";
 
  private:
   std::filesystem::path dir_;
   std::string option_;
-  std::set<std::string> written_;
+  std::set<std::string> written_;  // every file nf_gpu wrote here, by any run
+  std::set<std::string> claimed_;  // this run's
 };
 
 }  // namespace nf

@@ -33,6 +33,13 @@ void Progress::finish(const std::string& status) {
   draw(true);
 }
 
+void Progress::stop(const std::string& status) {
+  if (finished_) return;
+  finished_ = true;
+  status_ = status;
+  draw(true);
+}
+
 void Progress::draw(bool final_line) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   const double fraction = total_ ? double(done_) / double(total_) : 1.0;

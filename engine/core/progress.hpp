@@ -17,6 +17,8 @@ class Progress {
   // Sets the completed count and an optional status text (e.g. "loss 0.013 psnr 27.1").
   void update(std::uint64_t done, const std::string& status = "");
   void finish(const std::string& status = "");
+  // The last line of a run stopped early: the count reached, not the total.
+  void stop(const std::string& status);
 
  private:
   void draw(bool final_line);

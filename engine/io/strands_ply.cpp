@@ -90,6 +90,8 @@ StrandSet read_strands_ply(const std::filesystem::path& path) {
     if (e.name == "vertex") vertices = e.count;
     else if (e.name == "edge") edges = e.count;
     else if (e.name == "strand") strands = e.count, has_strand_element = true;
+    else if (e.name == "face")
+      throw InputError(where + ": this is a mesh (it has faces), not strands; a mesh is scored with `metrics --mesh FILE --ref FILE`");
     else throw InputError(where + ": unexpected element '" + e.name + "'");
     // The layout this reader supports is exactly the one write_strands_ply produces.
     for (const PlyProperty& p : e.properties) {

@@ -32,6 +32,7 @@ std::vector<std::filesystem::path> write_scene_orientations(gpu::Context& contex
     progress.update(k + 1, cam.name);
   }
   progress.finish();
+  folder.finish();  // one result per folder: an earlier run's other views go
   return files;
 }
 

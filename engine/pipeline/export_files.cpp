@@ -6,6 +6,7 @@
 
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/interrupt.hpp"
 #include "engine/core/log.hpp"
 #include "engine/core/stopwatch.hpp"
 #include "engine/fur/fur_views.hpp"
@@ -88,6 +89,7 @@ io::StrandStream exported_strands(const GroomInput& g, const ExportScene& sc, co
     exporter::RootMotion motion;
     std::vector<float> out;
     source.each_chunk([&](std::span<const float> xyz) {
+      stop_if_interrupted("export");  // a stop mid-file removes the partial file
       out.resize(xyz.size());
       for (std::size_t p = 0; p < xyz.size() / 3; ++p, at.next()) {
         glm::vec3 q = sc.frame.point({xyz[3 * p], xyz[3 * p + 1], xyz[3 * p + 2]});

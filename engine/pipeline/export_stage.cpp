@@ -61,6 +61,9 @@ exporter::ExportFrame read_export_frame(const ExportOutputs& o) {
 }
 
 void require_export(const fs::path& work) {
+  if (!fs::is_directory(work))
+    throw InputError("--work " + work.string() + ": " + (fs::exists(work) ? "is a file, not" : "no such folder; it should be") +
+                     " a WORK folder that nf_gpu reconstruct wrote");
   if (!fs::exists(export_outputs(work).record()) || !fs::exists(export_outputs(work).body()))
     throw InputError(work.string() + ": no finished export stage (export/export.json, export/body.glb); run nf_gpu reconstruct to the end first");
 }

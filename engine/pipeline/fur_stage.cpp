@@ -351,7 +351,7 @@ json train(StageContext& c, const FurSettings& s, const FurInputs& in, std::uniq
   });
   if (interrupted()) {
     trainer->save_checkpoint(checkpoint);
-    progress.finish("stopped");
+    progress.stop("stopped");
     throw Interrupted("fur: stopped at step " + std::to_string(trainer->step()) + " of " + std::to_string(steps) + "; checkpoint saved in " +
                       checkpoint.string());
   }

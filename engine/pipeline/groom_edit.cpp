@@ -4,6 +4,7 @@
 
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/interrupt.hpp"
 #include "engine/core/log.hpp"
 #include "engine/core/stopwatch.hpp"
 #include "engine/defur/vertex_fur.hpp"
@@ -60,6 +61,7 @@ json run_edit(gpu::Context& context, const EditOptions& o) {
   for (std::uint32_t i = 0; i < n; ++i) ids[i] = i;
   io::write_uniform_hair(folder.claim(SceneGroom{o.out}.strands().filename().string()), n, fur::kStrandPoints, [&](const auto& write) {
     model.field->infer(roots, ids, 65536, [&](std::size_t, std::uint32_t, const std::vector<float>& points, const std::vector<float>&) {
+      stop_if_interrupted("edit");  // the partial file is removed
       write(std::span<const float>(points));
     });
   });
@@ -88,6 +90,7 @@ json run_edit(gpu::Context& context, const EditOptions& o) {
               {"seconds", {{"inference", infer_seconds}, {"export", exported["seconds_total"]}, {"total", t_all.seconds()}}},
               {"export", exported}};
   write_file_atomic(folder.claim("edit.json"), record.dump(2) + "\n");
+  folder.finish();
   return record;
 }
 

@@ -6,6 +6,7 @@
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/stopwatch.hpp"
+#include "engine/core/text.hpp"
 #include "engine/export/region_edits.hpp"
 #include "engine/io/json_fields.hpp"
 #include "engine/io/mesh.hpp"
@@ -22,7 +23,13 @@ json run_pose(const PoseOptions& o) {
   const Stopwatch t_all;
   if (o.out.empty()) throw UsageError("--out: an output folder is needed");
   refuse_output_inside(o.out, o.work, "--out", "WORK");
-  if (!o.groom.empty()) refuse_output_inside(o.out, o.groom, "--out", "--groom");
+  if (!o.groom.empty()) {
+    refuse_output_inside(o.out, o.groom, "--out", "--groom");
+    if (!fs::exists(o.groom / "edit.json") || !fs::exists(SceneGroom{o.groom}.strands()))
+      throw InputError("--groom " + o.groom.string() + ": " + (fs::is_directory(o.groom) ? "holds no edit (edit.json and " +
+                       SceneGroom{o.groom}.strands().filename().string() + ")" : std::string("no such folder")) +
+                       "; it should be an output folder of nf_gpu edit");
+  }
   require_export(o.work);
   const ExportOptions export_options = preview_options(o.quality, o.formats);
   require_folder_or_absent(o.out, "--out");
@@ -39,11 +46,9 @@ json run_pose(const PoseOptions& o) {
     const std::string name = set.substr(6, eq - 6);
     std::size_t j = 0;
     while (j < skeleton.joint_count() && skeleton.joint_names[j] != name) ++j;
-    if (j == skeleton.joint_count()) {
-      std::string names;
-      for (const std::string& n : skeleton.joint_names) names += (names.empty() ? "" : ", ") + n;
-      throw UsageError("--set " + set + ": the skeleton has no joint '" + name + "' (joints: " + names + ")");
-    }
+    if (j == skeleton.joint_count())
+      throw UsageError("--set " + set + ": the skeleton has no joint '" + name + "'" + did_you_mean(name, skeleton.joint_names) +
+                       " (joints: " + join(skeleton.joint_names) + ")");
     glm::vec3 degrees;
     char tail = 0;
     if (std::sscanf(set.c_str() + eq + 1, "%f,%f,%f%c", &degrees.x, &degrees.y, &degrees.z, &tail) != 3 || !std::isfinite(glm::length(degrees)))
@@ -78,6 +83,7 @@ json run_pose(const PoseOptions& o) {
               {"rotation", "rotation vector in degrees, export frame (+x left, +y up, +z forward), about the joint"},
               {"seconds", t_all.seconds()}, {"export", exported}};
   write_file_atomic(folder.claim("pose.json"), record.dump(2) + "\n");
+  folder.finish();
   return record;
 }
 

@@ -147,7 +147,7 @@ json NeusStage::run(StageContext& c, const fs::path& out_dir, const fs::path& re
   });
   if (interrupted()) {
     trainer->save_checkpoint(checkpoint);
-    progress.finish("stopped");
+    progress.stop("stopped");
     throw Interrupted("neus: stopped at step " + std::to_string(trainer->step()) + " of " +
                       std::to_string(q.training.steps) + "; checkpoint saved in " + checkpoint.string());
   }

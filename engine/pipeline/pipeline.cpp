@@ -10,6 +10,7 @@
 #include "engine/core/content_hash.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/log.hpp"
+#include "engine/core/output_guard.hpp"
 #include "engine/core/text.hpp"
 #include "engine/pipeline/stage_record.hpp"
 
@@ -34,6 +35,46 @@ json stage_key(const Stage& stage, const StageContext& c) {
   json inputs = json::object();
   for (const fs::path& p : stage.inputs(c)) inputs[key_path(p, c)] = hash_file(p);
   return {{"version", kRecordVersion}, {"parameters", stage.parameters(c)}, {"inputs", inputs}};
+}
+
+// The settings that differ between two parameter objects, as "path before -> now" (objects are
+// entered, so a nested setting is named by its dotted path).
+void parameter_changes(const json& a, const json& b, const std::string& path, std::vector<std::string>& out) {
+  if (a == b) return;
+  if (a.is_object() && b.is_object()) {
+    std::set<std::string> names;
+    for (const auto& [k, v] : a.items()) names.insert(k);
+    for (const auto& [k, v] : b.items()) names.insert(k);
+    for (const std::string& k : names)
+      parameter_changes(a.contains(k) ? a[k] : json(), b.contains(k) ? b[k] : json(), path.empty() ? k : path + "." + k, out);
+    return;
+  }
+  const auto shown = [](const json& v) {
+    const std::string text = v.is_null() ? "(none)" : v.dump();
+    return text.size() > 40 ? text.substr(0, 37) + "..." : text;
+  };
+  out.push_back(path + " " + shown(a) + " -> " + shown(b));
+}
+
+// What differs between two keys, for people: "steps 400 -> 1200", "input WORK/body/fit.json".
+std::vector<std::string> key_changes(const json& before, const json& now) {
+  std::vector<std::string> out;
+  if (before.value("version", 0) != now.value("version", 0)) out.push_back("the record's version");
+  const json none = json::object();
+  parameter_changes(before.contains("parameters") ? before["parameters"] : none, now.contains("parameters") ? now["parameters"] : none, "",
+                    out);
+  const json& i0 = before.contains("inputs") ? before["inputs"] : none;
+  const json& i1 = now.contains("inputs") ? now["inputs"] : none;
+  for (const auto& [k, v] : i1.items())
+    if (!i0.contains(k) || i0[k] != v) out.push_back("input " + k);
+  for (const auto& [k, v] : i0.items())
+    if (!i1.contains(k)) out.push_back("input " + k + " (no longer read)");
+  return out;
+}
+
+std::string first_changes(const std::vector<std::string>& changes) {
+  std::vector<std::string> shown(changes.begin(), changes.begin() + std::ptrdiff_t(std::min<std::size_t>(4, changes.size())));
+  return join(shown, "; ") + (changes.size() > shown.size() ? "; and " + std::to_string(changes.size() - shown.size()) + " more" : "");
 }
 
 // The advice for a stage that ran out of memory: its memory settings with their values.
@@ -165,7 +206,7 @@ std::vector<StageOutcome> run_pipeline(const std::vector<std::unique_ptr<Stage>>
   const std::set<std::size_t> forced = graph.forced_by(options.from);
   if (!options.from.empty() && !needed.count(graph.index_of(options.from, "--from")))
     throw UsageError("--from " + options.from + ": stage " + options.to + " (--to) does not depend on it");
-  fs::create_directories(c.work);
+  create_output_folder(c.work, "--out");
 
   std::vector<StageOutcome> outcomes;
   std::set<std::string> ran;
@@ -198,6 +239,24 @@ std::vector<StageOutcome> run_pipeline(const std::vector<std::unique_ptr<Stage>>
         for (const fs::path& leftover : {partial, old, resume}) fs::remove_all(leftover);  // a kill's leftovers
         outcomes.push_back(outcome);
         continue;
+      }
+      if (previous) {
+        const std::vector<std::string> changes = key_changes(previous->key, key);
+        // Minutes of work are not thrown away for a stage the user neither named (--set) nor asked
+        // for (--to a later stage) when only settings differ (e.g. another --quality's defaults).
+        const bool upstream = !options.to.empty() && graph.index_of(options.to, "--to") != i;
+        const bool inputs_same = previous->key.value("inputs", json::object()) == key.value("inputs", json::object()) &&
+                                 previous->key.value("version", 0) == key.value("version", 0);
+        if (upstream && inputs_same && !c.settings.contains(name)) {
+          outcome.summary = previous->summary;
+          outcome.kept = "its result was made with other settings (" + first_changes(changes) + "); kept, as this run asks for " +
+                         options.to + " and sets none of " + name + "'s settings: --from " + name + " remakes it";
+          log::warn("stage ", name, ": ", outcome.kept);
+          for (const fs::path& leftover : {partial, old, resume}) fs::remove_all(leftover);
+          outcomes.push_back(outcome);
+          continue;
+        }
+        log::info("stage ", name, ": runs again, what it was made from changed: ", first_changes(changes));
       }
     }
 

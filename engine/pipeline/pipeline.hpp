@@ -24,9 +24,13 @@ struct RunOptions {
 
 struct StageOutcome {
   std::string name;
-  bool ran = false;   // false: skipped, its record matched
+  bool ran = false;   // false: skipped, its record matched (or kept, below)
   double seconds = 0;
   json summary;
+  // Not empty when the cached result was kept although this run's settings for the stage differ:
+  // which settings, and how to remake it. Only for a stage upstream of --to whose inputs are
+  // unchanged and whose settings the user did not name.
+  std::string kept;
 };
 
 // Throws UsageError for an unknown --from/--to (or a --from that --to does not depend on),

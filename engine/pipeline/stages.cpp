@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "engine/core/error.hpp"
+#include "engine/core/log.hpp"
 #include "engine/core/output_guard.hpp"
 #include "engine/core/text.hpp"
 #include "engine/pipeline/body_stage.hpp"
@@ -15,6 +16,9 @@
 
 namespace nf::pipeline {
 namespace fs = std::filesystem;
+
+// Fewer views than this and the surface cannot be whole: say so before minutes of work.
+constexpr std::size_t kFewViews = 8;
 
 std::vector<std::unique_ptr<Stage>> reconstruction_stages() {
   std::vector<std::unique_ptr<Stage>> stages;
@@ -77,6 +81,9 @@ std::vector<StageOutcome> reconstruct(gpu::Context& context, const ReconstructOp
   const fs::path scene_dir = fs::is_directory(scene_abs) ? scene_abs : scene_abs.parent_path();
   StageContext c{context, scene_dir, io::read_scene(options.scene), options.work, options.quality, std::move(settings)};
   c.scene.check_files(options.scene.string());
+  if (c.scene.cameras.size() < kFewViews)
+    log::warn("the scene has only ", c.scene.cameras.size(), " views: the surface, and every stage after it, will be poor; NeuS needs the "
+              "animal seen from all sides (20 views or more around it)");
   return run_pipeline(stages, c, options.run);
 }
 

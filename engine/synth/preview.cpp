@@ -143,6 +143,7 @@ PreviewResult render_previews(const PreviewOptions& o) {
     progress.update(i + 1);
   }
   progress.finish();
+  folder.finish();  // one result per folder: an earlier run's other views go
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   log::info("render: ", views.size(), " views, ", n, " strands coloured by ", result.coloring, ", radius ",
             result.strand_radius, " -> ", o.out.string());
