@@ -46,7 +46,7 @@ void write_hair(const std::filesystem::path& path, const StrandSet& s) {
   h.default_thickness = 1.f;
   h.default_transparency = 0.f;
   h.default_color[0] = h.default_color[1] = h.default_color[2] = 1.f;
-  std::strncpy(h.info, "nf_gpu strands", sizeof h.info - 1);
+  std::strncpy(h.info, ("nf_gpu strands; " + std::string(frame_marker(FileFrame::scene))).c_str(), sizeof h.info - 1);
   std::vector<std::uint16_t> segments(s.strand_count());
   for (std::uint32_t i = 0; i < s.strand_count(); ++i) {
     const std::uint32_t n = s.points_in(i);
@@ -99,7 +99,7 @@ void write_hair(const std::filesystem::path& path, const StrandStream& s) {
   h.default_segments = uniform ? first_count - 1 : 0;
   h.default_thickness = 1.f;
   h.default_color[0] = h.default_color[1] = h.default_color[2] = 1.f;
-  std::strncpy(h.info, "nf_gpu strands", sizeof h.info - 1);
+  std::strncpy(h.info, ("nf_gpu strands; " + std::string(frame_marker(s.frame))).c_str(), sizeof h.info - 1);
   write_file_atomic(path, [&](std::ostream& out) {
     out.write(reinterpret_cast<const char*>(&h), sizeof h);
     if (!uniform)

@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "engine/geometry/mesh.hpp"
+#include "engine/io/file_frame.hpp"
 #include "engine/io/skeleton.hpp"
 
 namespace nf::io {
@@ -47,7 +48,8 @@ void write_mesh_obj(const std::filesystem::path& path, const Mesh& mesh);
 // read_skeleton_gltf reads such a file's first skin back (joint names, parents, bind positions,
 // the first primitive's influences); InputError when the file has no skin or it is malformed.
 Mesh read_mesh_gltf(const std::filesystem::path& path);
-void write_mesh_glb(const std::filesystem::path& path, const Mesh& mesh, const Skeleton* skeleton = nullptr);
+// `frame` is stated in the asset's generator (file_frame.hpp).
+void write_mesh_glb(const std::filesystem::path& path, const Mesh& mesh, const Skeleton* skeleton = nullptr, FileFrame frame = FileFrame::scene);
 Skeleton read_skeleton_gltf(const std::filesystem::path& path);
 
 // By extension (.ply, .obj, .glb, .gltf).

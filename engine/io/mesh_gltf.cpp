@@ -389,7 +389,7 @@ Mesh read_mesh_gltf(const std::filesystem::path& path) {
   return MeshBuilder(model, path.string()).build();
 }
 
-void write_mesh_glb(const std::filesystem::path& path, const Mesh& m, const Skeleton* skeleton) {
+void write_mesh_glb(const std::filesystem::path& path, const Mesh& m, const Skeleton* skeleton, FileFrame frame) {
   const std::string where = path.string();
   m.validate(where);
   if (skeleton) skeleton->validate(where, m.vertex_count());
@@ -405,7 +405,7 @@ void write_mesh_glb(const std::filesystem::path& path, const Mesh& m, const Skel
 
   tinygltf::Model model;
   model.asset.version = "2.0";
-  model.asset.generator = "nf_gpu";
+  model.asset.generator = "nf_gpu; " + std::string(frame_marker(frame));
   if (n > 0) {  // an empty mesh: no scene at all (tinygltf would write an empty scene as null)
     tinygltf::Buffer& buffer = model.buffers.emplace_back();
     buffer.data.reserve(bin);

@@ -78,7 +78,7 @@ Mesh read_mesh_obj(const std::filesystem::path& path) {
 void write_mesh_obj(const std::filesystem::path& path, const Mesh& m) {
   m.validate(path.string());
   write_file_atomic(path, [&](std::ostream& out) {
-    out << "# nf_gpu mesh: " << m.vertex_count() << " vertices, " << m.triangle_count() << " triangles\n";
+    out << "# nf_gpu mesh: " << m.vertex_count() << " vertices, " << m.triangle_count() << " triangles\n# " << frame_marker(FileFrame::scene) << "\n";
     for (std::uint64_t v = 0; v < m.vertex_count(); ++v) {
       out << "v ";
       put_xyz(out, &m.positions[3 * v]);

@@ -120,7 +120,7 @@ void write_mesh_ply(const std::filesystem::path& path, const Mesh& m) {
   m.validate(path.string());
   const bool normals = !m.normals.empty(), regions = !m.regions.empty();
   std::ostringstream header;
-  header << "ply\nformat binary_little_endian 1.0\ncomment nf_gpu mesh\nelement vertex " << m.vertex_count()
+  header << "ply\nformat binary_little_endian 1.0\ncomment nf_gpu mesh\ncomment " << frame_marker(FileFrame::scene) << "\nelement vertex " << m.vertex_count()
          << "\nproperty float x\nproperty float y\nproperty float z\n"
          << (normals ? "property float nx\nproperty float ny\nproperty float nz\n" : "")
          << (regions ? "property int region\n" : "") << "element face " << m.triangle_count()

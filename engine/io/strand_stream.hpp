@@ -8,6 +8,7 @@
 #include <functional>
 #include <span>
 
+#include "engine/io/file_frame.hpp"
 #include "engine/io/strands.hpp"
 
 namespace nf::io {
@@ -21,6 +22,7 @@ struct StrandStream {
   std::function<void(const PointSink& sink)> each_chunk;
   std::function<float(std::uint64_t strand, std::uint32_t k)> width;  // per point, scene units; empty: none
   std::function<std::int32_t(std::uint64_t strand)> region;           // empty: none
+  FileFrame frame = FileFrame::scene;                                   // stated in the file (file_frame.hpp)
 
   // A view of `set` (which must outlive it): its thickness as widths, its regions.
   static StrandStream of(const StrandSet& set);

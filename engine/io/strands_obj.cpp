@@ -18,7 +18,7 @@ void write_strands_obj(const std::filesystem::path& path, const StrandSet& s) {
 
 void write_strands_obj(const std::filesystem::path& path, const StrandStream& s) {
   write_file_atomic(path, [&](std::ostream& out) {
-    out << "# nf_gpu strands: " << s.strands << " polylines, " << s.points << " points\n";
+    out << "# nf_gpu strands: " << s.strands << " polylines, " << s.points << " points\n# " << frame_marker(s.frame) << "\n";
     std::uint64_t written = 0;
     s.each_chunk([&](std::span<const float> xyz) {
       require_finite_points(path, xyz, 3 * written);

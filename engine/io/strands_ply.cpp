@@ -28,7 +28,8 @@ void write_strands_ply(const std::filesystem::path& path, const StrandStream& s)
   }();
   const bool thick = bool(s.width);
   std::ostringstream header;
-  header << "ply\nformat binary_little_endian 1.0\ncomment nf_gpu strands: polylines as vertex chains\n"
+  header << "ply\nformat binary_little_endian 1.0\ncomment nf_gpu strands: polylines as vertex chains\ncomment " << frame_marker(s.frame)
+         << (s.frame == FileFrame::exported ? " (metres, +y up, the animal facing +z; export.json beside it maps the scene to it)" : "") << "\n"
          << "element vertex " << s.points << "\nproperty float x\nproperty float y\nproperty float z\n"
          << (thick ? "property float thickness\n" : "") << "element edge " << edges
          << "\nproperty int vertex1\nproperty int vertex2\n"

@@ -121,7 +121,7 @@ void write_strands_usda(const std::filesystem::path& path, const StrandStream& s
       put_float(out, float(scene.meters_per_unit));
       out << '\n';
     }
-    out << "    doc = \"nf_gpu groom\"\n)\n\ndef Xform \"animal\" (\n    kind = \"component\"\n)\n{\n"
+    out << "    doc = \"nf_gpu groom; " << frame_marker(s.frame) << "\"\n)\n\ndef Xform \"animal\" (\n    kind = \"component\"\n)\n{\n"
         << "    def BasisCurves \"fur\"\n    {\n        uniform token type = \"linear\"\n        uniform token wrap = \"nonperiodic\"\n"
         << "        int[] curveVertexCounts = ";
     put_array(out, s.strands, [&](std::uint64_t i) { put_integer(out, s.points_in(i)); });

@@ -5,6 +5,7 @@
 
 #include "engine/core/error.hpp"
 #include "engine/core/log.hpp"
+#include "engine/io/file_frame.hpp"
 #include "engine/io/mesh.hpp"
 #include "engine/io/strand_files.hpp"
 #include "engine/metrics/surface_metrics.hpp"
@@ -26,6 +27,35 @@ std::optional<double> scale_in(const fs::path& file) {
   if (!v.is_number() || !(v.get<double>() > 0) || !std::isfinite(v.get<double>()))
     throw InputError(file.string() + ": cm_per_unit: expected a positive number, got " + v.dump());
   return v.get<double>();
+}
+
+// The files' points in their common frame (io::common_frame): an export-frame file compared with a
+// scene's comes back into the scene's frame, or is refused saying what to compare.
+struct Framed {
+  io::CommonFrame common;
+  std::vector<std::filesystem::path> files;
+  const glm::dmat4& map_of(const fs::path& f) const {
+    return common.to_common[std::size_t(std::find(files.begin(), files.end(), f) - files.begin())];
+  }
+  io::StrandSet strands(const fs::path& f) const {
+    io::StrandSet s = io::read_strands(f);
+    io::transform_points(s.points, map_of(f));
+    return s;
+  }
+  geometry::Mesh mesh(const fs::path& f) const {
+    geometry::Mesh m = io::read_mesh(f);
+    io::transform_points(m.positions, map_of(f));
+    if (map_of(f) != glm::dmat4(1.0)) m.normals.clear();  // not read by the metrics; stale after the map
+    return m;
+  }
+};
+
+Framed framed(const std::vector<fs::path>& given) {
+  Framed f;
+  for (const fs::path& p : given)
+    if (!p.empty()) f.files.push_back(p);
+  f.common = io::common_frame(f.files);
+  return f;
 }
 
 }  // namespace
@@ -50,7 +80,7 @@ std::optional<double> declared_scale(const std::vector<fs::path>& files, std::st
   return found;
 }
 
-double resolve_scale(const MetricsRequest& r, std::string* source) {
+double resolve_scale(const MetricsRequest& r, std::string* source, bool metres) {
   std::string declared_in;
   const std::optional<double> declared = declared_scale({r.pred, r.gt, r.outer, r.mesh, r.reference}, &declared_in);
   if (r.scale) {
@@ -64,6 +94,10 @@ double resolve_scale(const MetricsRequest& r, std::string* source) {
   if (declared) {
     if (source) *source = declared_in;
     return *declared;
+  }
+  if (metres) {  // the export frame is in metres, whatever the scene's unit
+    if (source) *source = "the export frame (metres)";
+    return 100.0;
   }
   throw UsageError("metrics: the files do not say their unit (no scale.json or synth gt/scene.json beside them): pass "
                    "--scale CM_PER_UNIT, e.g. --scale 100 for metres, --scale 0.1 for millimetres");
@@ -112,28 +146,36 @@ std::vector<MatchThreshold> parse_thresholds(const std::string& text) {
 }
 
 json strand_report(const MetricsRequest& r) {
+  const Framed frame = framed({r.pred, r.gt, r.outer});
   std::string source;
-  const double scale = resolve_scale(r, &source);
+  const double scale = resolve_scale(r, &source, frame.common.frame == io::FileFrame::exported);
   const std::vector<MatchThreshold> thresholds = parse_thresholds(r.thresholds);
-  const StrandSample pred = sample_strands(io::read_strands(r.pred), r.strands, r.points, r.seed);
+  const StrandSample pred = sample_strands(frame.strands(r.pred), r.strands, r.points, r.seed);
   json out{{"pred", r.pred.string()}, {"strands", pred.strands}, {"points_per_strand", pred.points},
            {"cm_per_unit", scale}, {"scale_source", source},
            {"consistency", to_json(consistency_metrics(pred, scale))}};
   if (!r.gt.empty()) {
-    const StrandSample gt = sample_strands(io::read_strands(r.gt), r.strands, r.points, r.seed + 1);
+    const StrandSample gt = sample_strands(frame.strands(r.gt), r.strands, r.points, r.seed + 1);
     out["gt"] = r.gt.string();
     out["match"] = to_json(match_scores(pred, gt, thresholds, scale));
   }
-  if (!r.outer.empty()) out["tips_to_outer"] = to_json(tip_chamfer(pred, io::read_mesh(r.outer), scale));
+  if (!r.outer.empty()) out["tips_to_outer"] = to_json(tip_chamfer(pred, frame.mesh(r.outer), scale));
+  out["frame"] = frame.common.frame == io::FileFrame::exported ? "export" : "scene";
+  json moved = json::array();
+  for (std::size_t i = 0; i < frame.files.size(); ++i)
+    if (frame.common.moved[i]) moved.push_back(frame.files[i].string());
+  if (!moved.empty()) out["brought_back_from_export"] = moved;
   return out;
 }
 
 json surface_report(const MetricsRequest& r) {
+  const Framed frame = framed({r.mesh, r.reference});
   std::string source;
-  const double scale = resolve_scale(r, &source);
-  const SurfaceMetrics m = surface_metrics(io::read_mesh(r.mesh), io::read_mesh(r.reference), scale, r.fscore_mm);
+  const double scale = resolve_scale(r, &source, frame.common.frame == io::FileFrame::exported);
+  const SurfaceMetrics m = surface_metrics(frame.mesh(r.mesh), frame.mesh(r.reference), scale, r.fscore_mm);
   return {{"mesh", r.mesh.string()}, {"reference", r.reference.string()}, {"cm_per_unit", scale},
-          {"scale_source", source}, {"surface", to_json(m)}};
+          {"scale_source", source}, {"frame", frame.common.frame == io::FileFrame::exported ? "export" : "scene"},
+          {"surface", to_json(m)}};
 }
 
 }  // namespace nf::metrics

@@ -28,8 +28,9 @@ struct MetricsRequest {
 std::optional<double> declared_scale(const std::vector<std::filesystem::path>& files, std::string* source = nullptr);
 
 // --scale when given (a declared scale that differs is reported in the warning log), else the
-// declared one, else UsageError: nf_gpu never guesses a unit.
-double resolve_scale(const MetricsRequest& request, std::string* source);
+// declared one, else 100 when the files are in the export frame (`metres`: it is in metres), else
+// UsageError: nf_gpu never guesses a unit.
+double resolve_scale(const MetricsRequest& request, std::string* source, bool metres = false);
 
 // "cm" -> (2 cm, 20 deg), (3 cm, 30), (4 cm, 40); "mm" -> (2 mm, 20), (3 mm, 30), (4 mm, 40);
 // otherwise comma-separated DISTANCE:ANGLE with a unit on the distance (mm, cm, m), e.g.

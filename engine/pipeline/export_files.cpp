@@ -125,6 +125,7 @@ json write_export(OutputFolder& folder, const GroomInput& g, const ExportScene& 
   std::array<float, body::kRegionCount> root_width{};
   for (int r = 0; r < body::kRegionCount; ++r) root_width[std::size_t(r)] = float(sc.hair_diameter_mm[std::size_t(r)] / 1000.0 * o.width_scale);
   io::StrandStream s = exported_strands(g, sc, body_export, posed_export);
+  s.frame = io::FileFrame::exported;
   const double taper = 1.0 - o.tip_width;
   s.width = [&g, &root_width, &s, taper](std::uint64_t i, std::uint32_t k) {
     const std::int32_t r = g.region[i];
@@ -163,7 +164,7 @@ json write_export(OutputFolder& folder, const GroomInput& g, const ExportScene& 
     for (std::size_t j = 0; j < skeleton.joint_count(); ++j)
       skeleton.joint_positions[j] = glm::vec3(sc.skinning[j] * glm::vec4(skeleton.joint_positions[j], 1.f));
   const fs::path glb = folder.claim("body.glb");
-  io::write_mesh_glb(glb, posed_export, &skeleton);
+  io::write_mesh_glb(glb, posed_export, &skeleton, io::FileFrame::exported);
   files.push_back({{"file", "body.glb"}, {"bytes", fs::file_size(glb)}});
   {
     io::NpyWrite face{"face", {n}, "<u4", {}}, bary{"barycentric", {n, 3}, "<f4", {}}, region{"region", {n}, "<i4", {}};

@@ -94,11 +94,16 @@ PreviewResult render_previews(const PreviewOptions& o) {
   refuse_output_inside(o.out, scene.root, "--out", "scene");
   require_folder_or_absent(o.out, "--out");
   const std::vector<std::uint32_t> views = io::parse_view_list(o.views, scene.cameras.size());
+  // The scene's cameras draw them: an export-frame file comes back into the scene's frame.
+  const io::CommonFrame frame = io::common_frame({o.mesh, o.strands}, true);
   geometry::Mesh mesh = io::read_mesh(o.mesh);
   mesh.validate(o.mesh.string());
   if (mesh.triangle_count() == 0) throw InputError(o.mesh.string() + ": the body mesh has no triangles");
-  const io::StrandSet strands = io::read_strands(o.strands);
+  io::transform_points(mesh.positions, frame.to_common[0]);
+  if (frame.moved[0]) mesh.normals.clear();  // recomputed below
+  io::StrandSet strands = io::read_strands(o.strands);
   strands.validate(o.strands.string());
+  io::transform_points(strands.points, frame.to_common[1]);
   if (mesh.normals.empty()) geometry::compute_vertex_normals(mesh);
 
   PreviewResult result;
