@@ -512,7 +512,7 @@ int main(int argc, char** argv) {
   edit->add_option("--strands", edit_strands, "re-sample this many roots over the fur first")->check(CLI::Range(1u, 40000000u));
   edit->add_option("--seed", edit_options.seed, "seed of new roots (default 1)");
   edit->add_option("--quality", edit_options.quality, "previews' preset (default draft)")->check(CLI::IsMember(nf::pipeline::quality_names()));
-  edit->add_option("--formats", edit_options.formats, "groom files, comma-separated (default usda,hair,ply,obj)");
+  edit->add_option("--formats", edit_options.formats, "groom files, comma-separated: usda, hair, ply, obj (default usda,hair)");
   edit->add_flag("--json", edit_json, "print the record as JSON");
 
   nf::pipeline::PoseOptions pose_options;
@@ -524,7 +524,7 @@ int main(int argc, char** argv) {
   pose->add_option("--set", pose_options.sets, "joint.NAME=rx,ry,rz: a rotation vector in degrees, export frame (repeatable)");
   pose->add_option("--groom", pose_groom, "pose an edit's folder instead of WORK's groom");
   pose->add_option("--quality", pose_options.quality, "previews' preset (default draft)")->check(CLI::IsMember(nf::pipeline::quality_names()));
-  pose->add_option("--formats", pose_options.formats, "groom files, comma-separated (default usda,hair,ply,obj)");
+  pose->add_option("--formats", pose_options.formats, "groom files, comma-separated: usda, hair, ply, obj (default usda,hair)");
   pose->add_flag("--json", pose_json, "print the record as JSON");
 
   // `nf_gpu help [COMMAND]` and a bare `nf_gpu` print the help, as most tools do.

@@ -20,7 +20,9 @@
 namespace nf::pipeline {
 
 struct ExportOptions {
-  std::string formats = "usda,hair,ply,obj";  // groom files written (comma-separated)
+  // Groom files written (comma-separated): what the README's tools read by default; PLY and OBJ
+  // (edge meshes, about as large again) on request.
+  std::string formats = "usda,hair";
   double tip_width = 0.1;                     // a strand's width at the tip, as a share of its root width
   double width_scale = 1;                     // the root width as a multiple of a hair's diameter
   int turntable_frames = 12;                  // previews: frames around the animal (0: none)

@@ -13,7 +13,7 @@ tmp="$(mktemp -d)"; trap 'rm -rf "$tmp"' EXIT
   --set body.global_steps=10 --set body.pose_steps=20 --set body.offset_steps=10 --set body.preview_views=1 \
   --set defur.resolution=64 --set defur.preview_views=1 --set frames.roots=3000 --set fur.steps=12 --set fur.warm_steps=4 \
   --set fur.batch=400 --set fur.strands=2500 --set fur.metric_strands=300 --set fur.resolution=64 --set fur.preview_views=1 \
-  --set fur.chamfer_queries=500 --set export.turntable_frames=2 --set export.compare_views=1 >/dev/null 2>&1
+  --set fur.chamfer_queries=500 --set export.turntable_frames=2 --set export.compare_views=1 --set export.formats=usda,hair,ply,obj >/dev/null 2>&1
 code=0
 blender -b --factory-startup --python-exit-code 1 -P "$here/check_import.py" -- "$tmp/work/export" \
   "$root/tools/blender/nf_gpu_import.py" > "$tmp/blender.log" 2>&1 || code=$?

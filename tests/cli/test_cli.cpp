@@ -17,6 +17,7 @@
 
 #include "engine/core/json.hpp"
 #include "engine/fur/roots.hpp"
+#include "engine/io/file_frame.hpp"
 #include "engine/io/mesh.hpp"
 #include "engine/io/strand_files.hpp"
 #include "tests/support/nf_process.hpp"
@@ -286,6 +287,26 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   const nf::json outcome = nf::json::parse(again.output.substr(again.output.find('[')));
   CHECK(outcome[0]["stage"] == "neus");
   CHECK(outcome[0]["ran"] == false);  // unchanged: skipped
+  CHECK_FALSE(outcome[0].contains("kept"));
+  // --to a later stage with other settings for neus, none of them named: the cached surface is
+  // kept (minutes of work), saying which settings differ and how to remake it.
+  const Result later = run("reconstruct --scene " + scene.string() + " --out " + work.string() + " --quality draft --set body.samples=2000"
+                           " --set body.hypothesis_steps=8 --set body.global_steps=10 --set body.pose_steps=20 --set body.offset_steps=10"
+                           " --set body.preview_views=1 --to body --json");
+  INFO(later.output);
+  REQUIRE(later.code == 0);
+  const nf::json kept = nf::json::parse(later.output.substr(later.output.find('[')));
+  CHECK(kept[0]["ran"] == false);
+  CHECK(kept[0]["kept"].get<std::string>().find("made with other settings (") != std::string::npos);
+  CHECK(kept[0]["kept"].get<std::string>().find("--from neus remakes it") != std::string::npos);
+  CHECK(m == nf::json::parse(std::ifstream(work / "neus" / "metrics.json")));  // the surface is the one made above
+  fs::remove_all(work / "body");  // the body stage below starts from nothing
+  // Named, the setting reruns the stage, saying what changed (and a few views get a warning).
+  const Result named = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + " --set neus.steps=13 --to neus");
+  REQUIRE(named.code == 0);
+  CHECK(named.output.find("runs again, what it was made from changed: training.steps 12 -> 13") != std::string::npos);
+  CHECK(named.output.find("the scene has only 8 views") == std::string::npos);  // 8 is enough to run without a warning
+  REQUIRE(run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + " --to neus").code == 0);  // back to 12 steps
 
   // The body stage on the cached surface: its files, labels on M_NeuS, ground-truth figures.
   const std::string body = " --set body.samples=2000 --set body.hypothesis_steps=8 --set body.global_steps=10"
@@ -334,7 +355,8 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   // Defur and frames on the cached stages: M_bald inside M_NeuS, its files, the masks, the roots.
   const std::string small = " --set defur.resolution=64 --set defur.preview_views=1 --set frames.roots=3000"
                             " --set fur.steps=12 --set fur.warm_steps=4 --set fur.batch=400 --set fur.strands=2500"
-                            " --set fur.metric_strands=300 --set fur.resolution=64 --set fur.preview_views=1 --set fur.chamfer_queries=500";
+                            " --set fur.metric_strands=300 --set fur.resolution=64 --set fur.preview_views=1 --set fur.chamfer_queries=500"
+                            " --set export.formats=usda,hair,ply,obj";
   const Result framed = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + body +
                             " --set knowledge.preset=cat" + small + " --json");
   INFO(framed.output);
@@ -414,6 +436,31 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   CHECK(nf::io::read_strands_ply(work / "export" / "fur.ply").regions.size() == 2500);
   CHECK(nf::io::read_strands_obj(work / "export" / "fur.obj").strand_count() == 2500);
   CHECK(nf::io::read_strands_usda(work / "export" / "fur.usda").points == exported.points);
+  // Every file states its frame; metrics brings an export file back over the scene through the
+  // export.json beside it, so the exported groom scores against the stage's as itself.
+  CHECK(nf::io::declared_frame(work / "export" / "fur.hair") == nf::io::FileFrame::exported);
+  CHECK(nf::io::declared_frame(work / "export" / "fur.ply") == nf::io::FileFrame::exported);
+  CHECK(nf::io::declared_frame(work / "export" / "body.glb") == nf::io::FileFrame::exported);
+  CHECK(nf::io::declared_frame(work / "fur" / "strands.hair") == nf::io::FileFrame::scene);
+  CHECK(nf::io::declared_frame(work / "defur" / "bald.ply") == nf::io::FileFrame::scene);
+  {
+    const Result across = run("metrics --pred " + (work / "export" / "fur.hair").string() + " --gt " + (work / "fur" / "strands.hair").string() +
+                              " --strands 2500 --json");
+    INFO(across.output);
+    REQUIRE(across.code == 0);
+    const nf::json scored = nf::json::parse(across.output.substr(across.output.find('{')));
+    CHECK(scored["frame"] == "scene");
+    CHECK(scored["brought_back_from_export"].size() == 1);
+    CHECK(scored["match"][0]["fscore"].get<double>() > 99.9);
+    const Result bodies = run("metrics --mesh " + (work / "export" / "body.glb").string() + " --ref " + (work / "defur" / "bald.ply").string() + " --scale 100 --json");
+    REQUIRE(bodies.code == 0);
+    CHECK(nf::json::parse(bodies.output.substr(bodies.output.find('{')))["surface"]["chamfer_mm"]["mean"].get<double>() < 0.01);
+    fs::create_directories(root / "lone");
+    fs::copy_file(work / "export" / "fur.hair", root / "lone" / "fur.hair", fs::copy_options::overwrite_existing);
+    const Result lone = run("metrics --pred " + (root / "lone" / "fur.hair").string() + " --gt " + (work / "fur" / "strands.hair").string());
+    CHECK(lone.code == 1);
+    CHECK(lone.output.find("no export.json beside it") != std::string::npos);
+  }
   const nf::io::Skeleton skeleton = nf::io::read_skeleton_gltf(work / "export" / "body.glb");
   const nf::geometry::Mesh body_glb = nf::io::read_mesh_gltf(work / "export" / "body.glb");
   CHECK(skeleton.joint_count() > 10);
@@ -424,7 +471,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   CHECK(lowest == doctest::Approx(0.0).epsilon(1e-5));
   CHECK(highest > 0.1f);
   CHECK(highest < 1.0f);
-  CHECK(framed.output.find("Blender hair: blender -b -P") == std::string::npos);  // --json prints JSON only
+  CHECK(framed.output.find("blender -b -P tools/blender/nf_gpu_import.py") == std::string::npos);  // --json prints JSON only
 
   // nf_gpu edit: the tail 1.5 times longer, the rest bit-identical; a shave; a density.
   const nf::io::StrandSet groom = nf::io::read_hair(work / "fur" / "strands.hair");
@@ -433,7 +480,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
     nf::json k = nf::json::parse(std::ifstream(work / "knowledge" / "knowledge.json"));
     const double tail_cm = k["regions"]["tail"]["length_cm"].get<double>();
     const Result edit = run("edit --work " + work.string() + " --out " + (root / "edit_tail").string() + " --set tail.length_cm=" +
-                            std::to_string(1.5 * tail_cm) + " --json");
+                            std::to_string(1.5 * tail_cm) + " --formats usda,hair,ply,obj --json");
     INFO(edit.output);
     REQUIRE(edit.code == 0);
     for (const char* f : {"fur.usda", "fur.hair", "fur.ply", "fur.obj", "body.glb", "roots.npz", "export.json", "edit.json", "scene_strands.hair"})
@@ -467,10 +514,30 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
     CHECK(tails > 0);
     CHECK(scaled == tails);
     CHECK(identical == others);
-    const Result shave = run("edit --work " + work.string() + " --out " + (root / "edit_shave").string() + " --shave tail --set body.density=0.5");
+    // One result per folder: the same folder again with the default formats (USD and .hair); the
+    // earlier edit's PLY and OBJ go, and the summary names only what this run wrote.
+    const Result defaults = run("edit --work " + work.string() + " --out " + (root / "edit_tail").string());
+    INFO(defaults.output);
+    REQUIRE(defaults.code == 0);
+    for (const char* f : {"fur.usda", "fur.hair", "edit.json"}) CHECK_MESSAGE(fs::exists(root / "edit_tail" / f), f);
+    for (const char* f : {"fur.ply", "fur.obj"}) CHECK_MESSAGE(!fs::exists(root / "edit_tail" / f), f);
+    CHECK(defaults.output.find("fur.hair   ") != std::string::npos);
+    CHECK(defaults.output.find("fur.ply    the strands") == std::string::npos);
+    // A file-size limit (SIGXFSZ): an error naming the file, nothing half-written left, the earlier
+    // result untouched; and the temporary a killed run left is removed.
+    const std::string before_hair = slurp(root / "edit_tail" / "fur.hair");
+    std::ofstream(root / "edit_tail" / ".fur.usda.tmp999999999-1") << "half";  // beyond any pid
+    const Result limited = run("edit --work " + work.string() + " --out " + (root / "edit_tail").string() + " --set tail.length_cm=9", "ulimit -f 16;");
+    CHECK(limited.code == 1);
+    CHECK(limited.output.find("file-size limit") != std::string::npos);
+    CHECK(limited.output.find((root / "edit_tail").string()) != std::string::npos);
+    for (const auto& e : fs::directory_iterator(root / "edit_tail"))
+      CHECK_MESSAGE(e.path().filename().string().find(".tmp") == std::string::npos, e.path().string());
+    CHECK(slurp(root / "edit_tail" / "fur.hair") == before_hair);
+    const Result shave = run("edit --work " + work.string() + " --out " + (root / "edit_shave").string() + " --shave tail --set body.density=0.5 --formats usda,hair,ply");
     INFO(shave.output);
     REQUIRE(shave.code == 0);
-    CHECK(shave.output.find("Blender hair: blender -b -P") != std::string::npos);
+    CHECK(shave.output.find("blender -b -P tools/blender/nf_gpu_import.py") != std::string::npos);
     const nf::io::StrandSet shaved = nf::io::read_strands_ply(root / "edit_shave" / "fur.ply");
     int shaved_body = 0, groom_body = 0;
     for (std::uint16_t region : shaved.regions) {
@@ -498,6 +565,15 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
     const Result wrong = run("pose --work " + work.string() + " --out " + (root / "posed2").string() + " --set joint.hed=0,40,0");
     CHECK(wrong.code == 2);
     CHECK(wrong.output.find("joints: ") != std::string::npos);
+    CHECK(wrong.output.find("did you mean 'head'") != std::string::npos);
+    // A posed groom cannot be put back over the scene: refused, saying what to compare.
+    const Result posed_metrics = run("metrics --pred " + (root / "posed" / "fur.hair").string() + " --gt " + (work / "fur" / "strands.hair").string());
+    CHECK(posed_metrics.code == 1);
+    CHECK(posed_metrics.output.find("posed groom") != std::string::npos);
+    const Result no_groom = run("pose --work " + work.string() + " --out " + (root / "posed3").string() + " --groom " + (root / "no_edit").string() +
+                                " --set joint.head=0,40,0");
+    CHECK(no_groom.code == 1);
+    CHECK(no_groom.output.find("--groom " + (root / "no_edit").string() + ": no such folder") != std::string::npos);
   }
   // The fur stage on the scene's truth (the bench's baseline (b) and ablations) with its curve of
   // scores against training time, over all 12 steps (select=trained: no 64 px photo resolves the
@@ -741,7 +817,7 @@ TEST_CASE("reconstruct: neus.mesh takes an envelope of the user's own, checked a
   fs::remove_all(root);
 }
 
-TEST_CASE("Ctrl-C during training saves a checkpoint, says how to resume and exits with 130") {
+TEST_CASE("Ctrl-C or SIGTERM during training saves a checkpoint, says how to resume and exits with 130 or 143") {
   namespace fs = std::filesystem;
   const fs::path root = fs::temp_directory_path() / "nf_cli_sigint";
   fs::remove_all(root);
@@ -767,11 +843,18 @@ TEST_CASE("Ctrl-C during training saves a checkpoint, says how to resume and exi
   CHECK_FALSE(fs::exists(work / "neus"));
 
   // The same command resumes from the saved step.
+  CHECK(out.find("(100%) stopped") == std::string::npos);
+  CHECK(out.find("the scene has only 6 views") != std::string::npos);  // the progress line shows the step reached
+
+  // The same command resumes from the saved step; SIGTERM (a scheduler's, timeout's) stops it the
+  // same way, with 128 + 15.
   pid = spawn(args, log);
   CHECK(wait_for(log, "resuming from", 120));
-  kill(pid, SIGINT);
-  CHECK(wait_exit(pid) == 130);
+  kill(pid, SIGTERM);
+  CHECK(wait_exit(pid) == 143);
   out = slurp(log);
   CHECK(out.find("at step 0") == std::string::npos);
+  CHECK(out.find("checkpoint saved") != std::string::npos);
+  CHECK(fs::exists(work / ".resume" / "neus" / "checkpoint.nfwt"));
   fs::remove_all(root);
 }
