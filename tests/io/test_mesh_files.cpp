@@ -196,7 +196,11 @@ TEST_CASE("GLB meshes round-trip exactly: with and without normals / regions, em
   std::uint32_t json_length;
   std::memcpy(&json_length, bytes.data() + 12, 4);
   const nf::json doc = nf::json::parse(bytes.substr(20, json_length));
-  CHECK(doc["asset"]["generator"] == "nf_gpu");
+  CHECK(doc["asset"]["generator"] == "nf_gpu; nf_gpu frame: scene");  // the frame it states (file_frame.hpp)
+  CHECK(nf::io::declared_frame(path) == nf::io::FileFrame::scene);
+  write_mesh_glb(path, tetrahedron(true), nullptr, nf::io::FileFrame::exported);
+  CHECK(nf::io::declared_frame(path) == nf::io::FileFrame::exported);
+  write_mesh_glb(path, tetrahedron(true));
   CHECK(doc["accessors"][0]["max"] == nf::json::array({1.0, 1.0, 1.0}));
   const auto& prim = doc["meshes"][0]["primitives"][0];
   CHECK(prim["mode"] == 4);
