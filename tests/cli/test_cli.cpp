@@ -135,6 +135,9 @@ TEST_CASE("nf_gpu metrics compares meshes") {
   const nf::json m = nf::json::parse(r.output);
   CHECK(m["surface"]["accuracy_mm"].get<double>() == doctest::Approx(10).epsilon(0.02));
   CHECK(run("metrics --mesh " + (dir / "nf_cli_quad.ply").string()).code == 2);  // --ref missing
+  const Result mesh_as_strands = run("metrics --scale 1 --pred " + (dir / "nf_cli_quad.ply").string());
+  CHECK(mesh_as_strands.code == 1);
+  CHECK(mesh_as_strands.output.find("this is a mesh (it has faces), not strands") != std::string::npos);
   std::filesystem::remove(dir / "nf_cli_quad.ply");
   std::filesystem::remove(dir / "nf_cli_quad_up.obj");
 }
@@ -178,11 +181,30 @@ TEST_CASE("nf_gpu metrics never guesses a unit, and takes thresholds with units"
   fs::remove_all(dir);
 }
 
-TEST_CASE("usage errors exit with 2") {
-  CHECK(run("").code == 2);
+TEST_CASE("usage errors exit with 2; help and folder messages say what is wrong") {
+  const Result bare = run("");
+  CHECK(bare.code == 2);
+  CHECK(bare.output.find("Subcommands:") != std::string::npos);  // the help, not "A subcommand is required"
   CHECK(run("no-such-command").code == 2);
   CHECK(run("bench --suite no-such-suite").code == 2);
   CHECK(run("--help").code == 0);
+  const Result help = run("help");
+  CHECK(help.code == 0);
+  CHECK(help.output.find("reconstruct") != std::string::npos);
+  CHECK(run("help pose").output.find("--groom") != std::string::npos);
+  const Result typo = run("help pos");
+  CHECK(typo.code == 2);
+  CHECK(typo.output.find("did you mean 'pose'") != std::string::npos);
+  // Folders: --out under a file, --work that does not exist.
+  const auto file = std::filesystem::temp_directory_path() / "nf_cli_a_file";
+  std::ofstream(file) << "x";
+  const Result under = run("reconstruct --scene " + file.parent_path().string() + " --out " + (file / "sub").string() + " --set knowledge.preset=cat");
+  CHECK(under.code == 1);
+  CHECK(under.output.find(file.string() + " is a file, not a folder") != std::string::npos);
+  const Result no_work = run("edit --work /nonexistent/work --out " + (file.parent_path() / "nf_cli_edit").string());
+  CHECK(no_work.code == 1);
+  CHECK(no_work.output.find("--work /nonexistent/work: no such folder") != std::string::npos);
+  std::filesystem::remove(file);
 }
 
 TEST_CASE("nf_gpu synth, orient and render chain on a tiny scene; bad views exit with 2") {
