@@ -556,6 +556,18 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
     for (const auto& e : fs::directory_iterator(root / "edit_tail"))
       CHECK_MESSAGE(e.path().filename().string().find(".tmp") == std::string::npos, e.path().string());
     CHECK(slurp(root / "edit_tail" / "fur.hair") == before_hair);
+    // Ctrl-C during an edit: a message, 130, no partial file, the earlier result intact.
+    {
+      const fs::path log = root / "edit_sigint.txt";
+      const pid_t pid = nf::test::spawn("edit --work " + work.string() + " --out " + (root / "edit_tail").string() + " --strands 3000000", log);
+      std::this_thread::sleep_for(std::chrono::seconds(3));
+      kill(pid, SIGINT);
+      CHECK(nf::test::wait_exit(pid) == 130);
+      CHECK_MESSAGE(slurp(log).find("edit: stopped on request; no partial file is left") != std::string::npos, slurp(log));
+      for (const auto& e : fs::directory_iterator(root / "edit_tail"))
+        CHECK_MESSAGE(e.path().filename().string().find(".tmp") == std::string::npos, e.path().string());
+      CHECK(slurp(root / "edit_tail" / "fur.hair") == before_hair);
+    }
     const Result shave = run("edit --work " + work.string() + " --out " + (root / "edit_shave").string() + " --shave tail --set body.density=0.5 --formats usda,hair,ply");
     INFO(shave.output);
     REQUIRE(shave.code == 0);
