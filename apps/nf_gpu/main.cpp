@@ -456,7 +456,7 @@ int main(int argc, char** argv) {
                       "\nevery stage's settings: nf_gpu reconstruct --help-stage STAGE (docs/settings.md)");
   auto* scene_option = reconstruct->add_option("--scene", reconstruct_scene, "scene folder or transforms.json (any format nf_gpu reads)");
   auto* out_option = reconstruct->add_option("--out", reconstruct_out, "WORK folder: one sub-folder per stage (created if needed)");
-  reconstruct->add_option("--quality", reconstruct_options.quality,
+  auto* reconstruct_quality = reconstruct->add_option("--quality", reconstruct_options.quality,
                           nf::join(nf::pipeline::quality_names()) + " (default: default; on a CPU driver only draft "
                           "finishes in minutes)")
       ->check(CLI::IsMember(nf::pipeline::quality_names()));
@@ -477,7 +477,7 @@ int main(int argc, char** argv) {
   auto* annotate = app.add_subcommand("annotate", "the knowledge stage (and what it needs): fur per region from a VLM, a preset or a file");
   annotate->add_option("--scene", annotate_scene, "scene folder or transforms.json")->required();
   annotate->add_option("--out", annotate_out, "WORK folder (shared with reconstruct)")->required();
-  annotate->add_option("--quality", annotate_options.quality, "quality of the stages before it (default: default)")
+  auto* annotate_quality = annotate->add_option("--quality", annotate_options.quality, "quality of the stages before it (default: default)")
       ->check(CLI::IsMember(nf::pipeline::quality_names()));
   annotate->add_option("--set", annotate_options.settings,
                        "stage.key=value, e.g. knowledge.preset=cat, or knowledge.vlm=URL knowledge.model=NAME (repeatable)");
@@ -576,11 +576,13 @@ int main(int argc, char** argv) {
       if (scene_option->count() == 0 || out_option->count() == 0)
         throw nf::UsageError("reconstruct needs --scene and --out (nf_gpu reconstruct --help)");
       reconstruct_options.scene = reconstruct_scene, reconstruct_options.work = reconstruct_out;
+      reconstruct_options.run.quality_named = reconstruct_quality->count() > 0;
       if (scene_scale > 0) reconstruct_options.settings.push_back("knowledge.cm_per_unit=" + json(scene_scale).dump());
       return run_reconstruct(reconstruct_options, reconstruct_json, profile, quoted_command_line(argc, argv));
     }
     if (*annotate) {
       annotate_options.scene = annotate_scene, annotate_options.work = annotate_out, annotate_options.run.to = "knowledge";
+      annotate_options.run.quality_named = annotate_quality->count() > 0;
       if (annotate_scale > 0) annotate_options.settings.push_back("knowledge.cm_per_unit=" + json(annotate_scale).dump());
       return run_annotate(annotate_options, annotate_json, quoted_command_line(argc, argv));
     }

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <chrono>
 #include <cstring>
 #include <fstream>
 #include <random>
@@ -15,6 +16,17 @@ namespace nf {
 namespace {
 
 constexpr std::string_view kTemporaryMark = ".tmp";
+// A temporary of another host (a shared disk) is only judged by its age: its pid means nothing here.
+constexpr auto kForeignTemporaryAge = std::chrono::hours(24);
+
+std::string host_name() {
+  char name[256] = {};
+  if (gethostname(name, sizeof name - 1) != 0) return "localhost";
+  std::string host(name);
+  for (char& ch : host)
+    if (ch == '/' || ch == '@') ch = '_';
+  return host;
+}
 
 // Why the last write failed, in words (a stream keeps no error of its own; errno is the system's).
 std::string write_failure(int error) {
@@ -39,14 +51,23 @@ void write_file_atomic(const std::filesystem::path& path, const std::function<vo
   tmp_name += std::to_string(getpid());
   tmp_name += '-';
   tmp_name += std::to_string(rd());
+  tmp_name += '@';
+  tmp_name += host_name();
   const fs::path tmp = dir / tmp_name;
   try {
     {
       std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
       if (!out) throw InputError("cannot write '" + tmp.string() + "': " + write_failure(errno));
-      errno = 0;
-      write(out);
-      out.flush();
+      // The first failing write throws, so errno is the failure's (and no work follows it).
+      out.exceptions(std::ios::badbit);
+      try {
+        write(out);
+        out.flush();
+      } catch (const std::ios_base::failure&) {
+        const int error = errno;
+        throw InputError("writing '" + path.string() + "' failed: " + write_failure(error) + "; nothing was left in its place");
+      }
+      out.exceptions(std::ios::goodbit);
       if (!out) throw InputError("writing '" + path.string() + "' failed: " + write_failure(errno) + "; nothing was left in its place");
       out.close();
       if (!out) throw InputError("writing '" + path.string() + "' failed: " + write_failure(errno) + "; nothing was left in its place");
@@ -65,15 +86,24 @@ std::vector<std::string> remove_stale_temporaries(const std::filesystem::path& d
   std::error_code ec;
   for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
     const std::string name = e.path().filename().string();
-    // ".NAME.tmpPID-RANDOM"
-    const std::size_t mark = name.rfind(kTemporaryMark), dash = name.rfind('-');
-    if (name.empty() || name[0] != '.' || mark == std::string::npos || dash == std::string::npos || dash < mark) continue;
-    const std::string pid_text = name.substr(mark + kTemporaryMark.size(), dash - mark - kTemporaryMark.size());
-    const std::string random_text = name.substr(dash + 1);
+    // ".NAME.tmpPID-RANDOM@HOST" (no "@HOST" from older versions: this host)
+    const std::size_t mark = name.rfind(kTemporaryMark);
+    if (name.empty() || name[0] != '.' || mark == std::string::npos) continue;
+    const std::string tail = name.substr(mark + kTemporaryMark.size());
+    const std::size_t dash = tail.find('-'), at = tail.find('@');
+    if (dash == std::string::npos || (at != std::string::npos && at < dash)) continue;
+    const std::string pid_text = tail.substr(0, dash);
+    const std::string random_text = tail.substr(dash + 1, at == std::string::npos ? std::string::npos : at - dash - 1);
+    const std::string host = at == std::string::npos ? host_name() : tail.substr(at + 1);
     const auto digits = [](const std::string& s) { return !s.empty() && s.find_first_not_of("0123456789") == std::string::npos; };
     if (!digits(pid_text) || !digits(random_text) || pid_text.size() > 9) continue;
-    const pid_t pid = pid_t(std::stol(pid_text));
-    if (pid == getpid() || kill(pid, 0) == 0 || errno != ESRCH) continue;  // its writer may still be at work
+    if (host != host_name()) {
+      const auto age = fs::file_time_type::clock::now() - fs::last_write_time(e.path(), ec);
+      if (ec || age < kForeignTemporaryAge) continue;
+    } else {
+      const pid_t pid = pid_t(std::stol(pid_text));
+      if (pid == getpid() || kill(pid, 0) == 0 || errno != ESRCH) continue;  // its writer may still be at work
+    }
     if (fs::remove(e.path(), ec)) removed.push_back(name);
   }
   return removed;

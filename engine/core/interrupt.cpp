@@ -40,7 +40,9 @@ void set_interrupted(bool value) {
 int interrupted_exit_code() { return 128 + g_signal.load(); }
 
 void stop_if_interrupted(const std::string& what) {
-  if (interrupted()) throw Interrupted(what + ": stopped on request; no partial file is left, and the files of an earlier run stay as they were");
+  if (interrupted())
+    throw Interrupted(what + ": stopped on request; no partial file is left, but files this run had finished may sit beside an earlier "
+                      "run's: run the command again to complete it");
 }
 
 void ignore_file_size_signal() {

@@ -44,40 +44,58 @@ void create_output_folder(const fs::path& dir, const std::string& option) {
                      "; choose a folder you can write to");
 }
 
-OutputFolder::OutputFolder(fs::path dir, std::string option) : dir_(std::move(dir)), option_(std::move(option)) {
+OutputFolder::OutputFolder(fs::path dir, std::string command, std::string option)
+    : dir_(std::move(dir)), command_(std::move(command)), option_(std::move(option)) {
   create_output_folder(dir_, option_);
+  // One line per file: "NAME<tab>COMMAND" ("NAME" alone in records of older versions).
   std::ifstream record(dir_ / kRecordName);
-  for (std::string line; std::getline(record, line);)
-    if (!line.empty()) written_.insert(line);
+  for (std::string line; std::getline(record, line);) {
+    if (line.empty()) continue;
+    const std::size_t tab = line.find('\t');
+    written_[line.substr(0, tab)] = tab == std::string::npos ? std::string() : line.substr(tab + 1);
+  }
   for (const std::string& name : remove_stale_temporaries(dir_)) log::info("removed ", (dir_ / name).string(), ", left by a run that was killed");
 }
 
 fs::path OutputFolder::claim(const std::string& name) {
   const fs::path path = dir_ / name;
   claimed_.insert(name);
-  if (written_.count(name)) return path;
+  const auto known = written_.find(name);
+  if (known != written_.end() && known->second == command_) return path;
   std::error_code ec;
-  if (fs::exists(fs::symlink_status(path, ec)))
+  if (known == written_.end() && fs::exists(fs::symlink_status(path, ec)))
     throw InputError(option_ + " " + dir_.string() + ": " + name + " exists and was not written by nf_gpu; it is "
                      "never replaced: choose an empty or new folder");
-  written_.insert(name);
-  std::string text;
-  for (const std::string& n : written_) text += n + "\n";
-  write_file_atomic(dir_ / kRecordName, text);
+  written_[name] = command_;
+  save_record();
   return path;
 }
 
-std::vector<std::string> OutputFolder::finish() {
-  std::vector<std::string> removed;
-  std::error_code ec;
-  for (const std::string& name : written_)
-    if (!claimed_.count(name) && fs::remove(dir_ / name, ec)) removed.push_back(name);
-  if (removed.empty() && written_ == claimed_) return removed;
-  written_ = claimed_;
+void OutputFolder::save_record() const {
   std::string text;
-  for (const std::string& n : written_) text += n + "\n";
+  for (const auto& [name, command] : written_) text += name + (command.empty() ? "" : "\t" + command) + "\n";
   write_file_atomic(dir_ / kRecordName, text);
-  if (!removed.empty()) log::info("removed ", removed.size(), " file(s) of an earlier run from ", dir_.string(), " (", removed.front(), removed.size() > 1 ? ", ..." : "", ")");
+}
+
+std::vector<std::string> OutputFolder::finish() {
+  NF_CHECK(!command_.empty(), "OutputFolder::finish needs the command that writes the folder");
+  std::vector<std::string> removed;
+  // A plain file name only: a record edited to hold "../x" or "/x" never removes anything outside.
+  const auto plain = [](const std::string& n) { return !n.empty() && n != "." && n != ".." && n.find('/') == std::string::npos; };
+  for (auto it = written_.begin(); it != written_.end();) {
+    std::error_code ec;
+    if (it->second == command_ && !claimed_.count(it->first) && plain(it->first)) {
+      if (fs::remove(dir_ / it->first, ec) || !fs::exists(dir_ / it->first)) removed.push_back(it->first);
+      it = written_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+  if (removed.empty()) return removed;
+  save_record();
+  std::string names;
+  for (const std::string& n : removed) names += (names.empty() ? "" : ", ") + n;
+  log::warn("removed from ", dir_.string(), " what an earlier ", command_, " wrote there and this one did not: ", names);
   return removed;
 }
 

@@ -37,6 +37,15 @@ FileFrame declared_frame(const fs::path& file) {
   head.resize(std::size_t(in.gcount()));
   for (const FileFrame f : {FileFrame::exported, FileFrame::scene})
     if (head.find(frame_marker(f)) != std::string::npos) return f;
+  // A file exported before files stated their frame: the export.json beside it lists it.
+  const fs::path record = fs::absolute(file).parent_path() / "export.json";
+  if (fs::exists(record)) {
+    try {
+      for (const json& f : read_json_file(record).value("files", json::array()))
+        if (f.is_object() && f.value("file", std::string()) == file.filename().string()) return FileFrame::exported;
+    } catch (const std::exception&) {  // not an export.json of ours: it says nothing
+    }
+  }
   return FileFrame::unknown;
 }
 

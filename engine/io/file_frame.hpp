@@ -18,7 +18,8 @@ enum class FileFrame { unknown, scene, exported };
 std::string_view frame_marker(FileFrame frame);
 // For messages: "the scene's frame", "the export frame (metres, +y up)", "no stated frame".
 std::string frame_words(FileFrame frame);
-// What the file says (unknown for a file nf_gpu did not write, or an older one).
+// What the file says, or for an older file the export.json beside it that lists it (unknown for a
+// file nf_gpu did not write).
 FileFrame declared_frame(const std::filesystem::path& file);
 
 // Brings files into one frame before they are compared or drawn together. Each file's matrix maps

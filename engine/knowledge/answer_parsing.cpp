@@ -514,20 +514,25 @@ double eye_distance_cm_of(const std::string& text, const std::string& where) {
 }
 
 double hair_diameter_mm_of(const std::string& text, const std::string& where) {
-  for (const FoundObject& o : find_objects(text))
-    for (const auto& [key, value] : o.value.items())
-      if (key_has_any(key, {"diam", "hair", "width", "thick"})) {
-        if (value.is_number()) return number_of(value, where + ": " + key);  // the question asks for mm
-        if (value.is_string()) {
-          const std::string s = value.get<std::string>();
-          std::size_t pos = 0;
-          skip_spaces(s, pos);
-          const double plain = parse_number_prefix(s, pos);
-          skip_spaces(s, pos);
-          if (std::isfinite(plain) && pos == s.size()) return plain;
-          if (const std::optional<double> cm = length_text_cm(s)) return *cm * 10.0;  // a plain number was read above: this has a unit
-          throw InputError(where + ": " + key + " = '" + s + "' is not a diameter (expected a number of mm, e.g. 0.07)");
-        }
+  const std::vector<FoundObject> objects = find_objects(text);
+  // A key naming the diameter first; one that names a length ("hair_length_cm") never.
+  for (const std::vector<std::string>& hints : {std::vector<std::string>{"diam"}, std::vector<std::string>{"hair", "width", "thick"}})
+    for (const FoundObject& o : objects)
+      for (const auto& [key, value] : o.value.items()) {
+        if (!key_has_any(key, hints) || key_has_any(key, {"length", "long"})) continue;
+        // A unit in the key ("_um", "_cm"); else mm, as the question asks.
+        const std::string k = to_lower(key);
+        const double unit = k.ends_with("um") || k.find("micro") != std::string::npos ? 1e-3 : k.ends_with("cm") ? 10.0 : 1.0;
+        if (value.is_number()) return unit * number_of(value, where + ": " + key);
+        if (!value.is_string()) continue;
+        const std::string s = value.get<std::string>();
+        std::size_t pos = 0;
+        skip_spaces(s, pos);
+        const double plain = parse_number_prefix(s, pos);
+        skip_spaces(s, pos);
+        if (std::isfinite(plain) && pos == s.size()) return unit * plain;
+        if (const std::optional<double> cm = length_text_cm(s)) return *cm * 10.0;  // a plain number was read above: this has a unit
+        throw InputError(where + ": " + key + " = '" + s + "' is not a diameter (expected a number of mm, e.g. 0.07)");
       }
   if (const std::optional<double> cm = first_length_cm_in_prose(text)) return *cm * 10.0;
   throw InputError(where + ": the answer gives no diameter in mm");

@@ -19,8 +19,9 @@ namespace nf::knowledge {
 
 // A hair's diameter when the knowledge gives none: a cat's or dog's guard hair (0.04-0.12 mm).
 inline constexpr float kDefaultHairDiameterMm = 0.08f;
-// A hair is 5 um (fine underfur) to 5 mm (a porcupine's quill).
-inline constexpr float kMinHairMm = 0.005f, kMaxHairMm = 5.f;
+// A furry animal's hair is 5 um (fine underfur) to 2 mm (an elephant's); a larger answer is a
+// length or the fur layer's thickness, not a hair.
+inline constexpr float kMinHairMm = 0.005f, kMaxHairMm = 2.f;
 
 struct RegionKnowledge {
   float length_cm = 0, thickness_cm = 0;

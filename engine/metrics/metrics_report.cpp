@@ -91,13 +91,13 @@ double resolve_scale(const MetricsRequest& r, std::string* source, bool metres) 
     if (source) *source = "--scale";
     return *r.scale;
   }
+  if (metres) {  // the export frame is in metres, whatever a scale.json beside the files says of the scene
+    if (source) *source = "the export frame (metres)";
+    return 100.0;
+  }
   if (declared) {
     if (source) *source = declared_in;
     return *declared;
-  }
-  if (metres) {  // the export frame is in metres, whatever the scene's unit
-    if (source) *source = "the export frame (metres)";
-    return 100.0;
   }
   throw UsageError("metrics: the files do not say their unit (no scale.json or synth gt/scene.json beside them): pass "
                    "--scale CM_PER_UNIT, e.g. --scale 100 for metres, --scale 0.1 for millimetres");

@@ -27,8 +27,8 @@ struct MetricsRequest {
 // InputError when two declarations disagree or one is malformed. `source` names the file used.
 std::optional<double> declared_scale(const std::vector<std::filesystem::path>& files, std::string* source = nullptr);
 
-// --scale when given (a declared scale that differs is reported in the warning log), else the
-// declared one, else 100 when the files are in the export frame (`metres`: it is in metres), else
+// --scale when given (a declared scale that differs is reported in the warning log), else 100
+// when the files are in the export frame (`metres`: it is in metres), else the declared one, else
 // UsageError: nf_gpu never guesses a unit.
 double resolve_scale(const MetricsRequest& request, std::string* source, bool metres = false);
 

@@ -16,7 +16,7 @@ std::vector<std::filesystem::path> write_scene_orientations(gpu::Context& contex
   refuse_output_inside(o.out, scene.root, "--out", "scene");
   const std::vector<std::uint32_t> views = io::parse_view_list(o.views, scene.cameras.size());
   const std::vector<std::string> names = io::view_file_names(scene, views);
-  OutputFolder folder(o.out);
+  OutputFolder folder(o.out, "orient");
   std::vector<std::filesystem::path> files;
   Progress progress("orient", views.size());
   for (std::size_t k = 0; k < views.size(); ++k) {

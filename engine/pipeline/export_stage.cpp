@@ -143,7 +143,7 @@ json ExportStage::run(StageContext& c, const fs::path& out_dir, const fs::path&)
   for (std::uint32_t v = 0; v < c.scene.cameras.size(); ++v)
     if (io::is_held_out(v, every)) scene.compare_cameras.push_back(v);
   if (scene.compare_cameras.empty() && !c.scene.cameras.empty()) scene.compare_cameras.push_back(0);
-  OutputFolder folder(out_dir);
+  OutputFolder folder(out_dir, "export");
   json record = write_export(folder, groom, scene, o);
   log::info("export: ", groom.strands.strands, " strands and the rigged body (", skeleton.joint_count(), " joints)");
   return record;

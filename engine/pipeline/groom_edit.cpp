@@ -44,7 +44,7 @@ json run_edit(gpu::Context& context, const EditOptions& o) {
     before = base.size();
     return exporter::edit_roots(base, edits, knowledge, bald, frames, vertex_fur, o.seed + 101);
   }();
-  OutputFolder folder(o.out);
+  OutputFolder folder(o.out, "edit");
 
   // Inference from the trained field: the same code and chunks as the fur stage, so strands of
   // unedited roots come out bit-identical.

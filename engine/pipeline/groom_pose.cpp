@@ -67,8 +67,8 @@ json run_pose(const PoseOptions& o) {
   scene.frame = read_export_frame(export_outputs(o.work));
   scene.skeleton = &skeleton;
   scene.hair_diameter_mm = exporter::region_hair_diameter_mm(knowledge, {});
-  if (!o.groom.empty() && fs::exists(o.groom / "edit.json")) {  // the edit's hair diameters
-    const json e = io::read_json_file(o.groom / "edit.json");
+  if (!o.groom.empty() && fs::exists(o.groom / "edit.json") && io::read_json_file(o.groom / "edit.json").contains("hair_diameter_mm")) {
+    const json e = io::read_json_file(o.groom / "edit.json");  // the edit's hair diameters
     for (int r = 0; r < body::kRegionCount; ++r) {
       const std::string name(body::kRegionNames[std::size_t(r)]);
       const io::JsonField v = io::JsonField(e, (o.groom / "edit.json").string()).at("hair_diameter_mm").at(name);
@@ -77,7 +77,7 @@ json run_pose(const PoseOptions& o) {
     }
   }
   scene.skinning = exporter::skinning_transforms(skeleton, rotations);
-  OutputFolder folder(o.out);
+  OutputFolder folder(o.out, "pose");
   const json exported = write_export(folder, groom, scene, export_options);
   json record{{"work", fs::absolute(o.work).string()}, {"groom", fs::absolute(from).string()}, {"joints", asked},
               {"rotation", "rotation vector in degrees, export frame (+x left, +y up, +z forward), about the joint"},

@@ -79,6 +79,25 @@ std::string first_changes(const std::vector<std::string>& changes) {
   return join(shown, "; ") + (changes.size() > shown.size() ? "; and " + std::to_string(changes.size() - shown.size()) + " more" : "");
 }
 
+// True when the stage's settings are all that differ from its result: the parameters it would have
+// with the quality and settings that result was made with (recorded beside it) are its key's, and so
+// are its inputs. Scene data in the parameters (cameras, the scene's unit) and the stage's version
+// are then unchanged. False for a record that does not say what it was made with.
+bool only_settings_differ(const Stage& stage, const StageContext& c, const StageRecord& previous, const json& key) {
+  if (previous.quality.empty() || !previous.settings.is_object()) return false;
+  if (previous.key.value("version", 0) != key.value("version", 0) ||
+      previous.key.value("inputs", json::object()) != key.value("inputs", json::object()))
+    return false;
+  StageContext then = c;
+  then.quality = previous.quality;
+  then.settings[stage.name()] = previous.settings;
+  try {
+    return stage.parameters(then) == previous.key.value("parameters", json());
+  } catch (const Error&) {  // a setting that no longer exists or is out of range now
+    return false;
+  }
+}
+
 // The advice for a stage that ran out of memory: its memory settings with their values.
 std::string memory_advice(const Stage& stage, const StageContext& c) {
   const std::vector<std::string> keys = stage.memory_settings();
@@ -244,17 +263,18 @@ std::vector<StageOutcome> run_pipeline(const std::vector<std::unique_ptr<Stage>>
       }
       if (previous) {
         const std::vector<std::string> changes = key_changes(previous->key, key);
-        // Minutes of work are not thrown away for a stage the user neither named (--set) nor asked
-        // for (--to a later stage) when only settings differ (e.g. another --quality's defaults).
+        // Minutes of work are not thrown away for a stage the user neither named (--set, or
+        // another --quality) nor asked for (--to a later stage) when only its settings differ (the
+        // defaults of another quality, or --set values of an earlier run).
         const bool upstream = !options.to.empty() && graph.index_of(options.to, "--to") != i;
-        const bool inputs_same = previous->key.value("inputs", json::object()) == key.value("inputs", json::object()) &&
-                                 previous->key.value("version", 0) == key.value("version", 0);
-        if (upstream && inputs_same && !c.settings.contains(name)) {
+        const bool named = c.settings.contains(name) || (options.quality_named && previous->quality != c.quality);
+        if (upstream && !named && only_settings_differ(stage, c, *previous, key)) {
           outcome.summary = previous->summary;
           outcome.kept = "its result was made with other settings (" + first_changes(changes) + "); kept, as this run asks for " +
                          options.to + " and sets none of " + name + "'s settings: --from " + name + " remakes it";
           log::warn("stage ", name, ": ", outcome.kept);
-          for (const fs::path& leftover : {partial, old, resume}) fs::remove_all(leftover);
+          // A checkpoint in `resume` may be this run's settings' own (an interrupted --from): kept.
+          for (const fs::path& leftover : {partial, old}) fs::remove_all(leftover);
           outcomes.push_back(outcome);
           continue;
         }
@@ -283,6 +303,8 @@ std::vector<StageOutcome> run_pipeline(const std::vector<std::unique_ptr<Stage>>
     outcome.ran = true;
     write_file_atomic(partial / "stage.json", json{{"stage", name},
                                                    {"key", key},
+                                                   {"quality", c.quality},
+                                                   {"settings", stage.settings().values(c.quality, c.settings.value(name, json::object()))},
                                                    {"summary", outcome.summary},
                                                    {"seconds", outcome.seconds},
                                                    {"finished", now_utc()}}

@@ -20,6 +20,7 @@ namespace nf::pipeline {
 struct RunOptions {
   std::string from;  // rerun this stage and every stage that depends on it, even when unchanged ("" = none)
   std::string to;    // run only this stage and the stages it depends on ("" = all)
+  bool quality_named = false;  // --quality was given: a stage made at another quality is not kept
 };
 
 struct StageOutcome {

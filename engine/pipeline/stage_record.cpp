@@ -23,6 +23,8 @@ std::optional<StageRecord> read_stage_record(const std::filesystem::path& file) 
   if (const auto s = j.find("summary"); s != j.end() && s->is_object()) r.summary = *s;
   if (const auto f = j.find("finished"); f != j.end() && f->is_string()) r.finished = f->get<std::string>();
   if (const auto t = j.find("seconds"); t != j.end() && t->is_number()) r.seconds = t->get<double>();
+  if (const auto q = j.find("quality"); q != j.end() && q->is_string()) r.quality = q->get<std::string>();
+  if (const auto s = j.find("settings"); s != j.end() && s->is_object()) r.settings = *s;
   return r;
 }
 

@@ -16,6 +16,10 @@ struct StageRecord {
   json summary = json::object();     // the stage's own summary (an object)
   std::string finished = "?";        // UTC time of completion
   double seconds = 0;
+  // What the result was made with, beside its key: the quality and the stage's resolved settings
+  // (empty and null in records written before they were kept).
+  std::string quality;
+  json settings;
 };
 
 // nullopt when the file is missing, not JSON or not an object with a key.

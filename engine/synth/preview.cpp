@@ -137,7 +137,7 @@ PreviewResult render_previews(const PreviewOptions& o) {
 
   // File names: file-safe camera names, made unique with the camera index.
   const std::vector<std::string> names = io::view_file_names(scene, views);
-  OutputFolder folder(o.out);
+  OutputFolder folder(o.out, "render");
   Progress progress("render", views.size());
   for (std::size_t i = 0; i < views.size(); ++i) {
     const io::Camera& cam = scene.cameras[views[i]];
@@ -174,7 +174,7 @@ std::vector<fs::path> render_region_previews(const geometry::Mesh& mesh, const i
                                             const std::vector<std::uint32_t>& views, const fs::path& out) {
   const std::vector<io::Image> images = render_region_images(mesh, scene, views);
   const std::vector<std::string> names = io::view_file_names(scene, views);
-  OutputFolder folder(out);
+  OutputFolder folder(out, "previews");
   std::vector<fs::path> files;
   for (std::size_t i = 0; i < views.size(); ++i) {
     files.push_back(folder.claim(names[i] + ".png"));

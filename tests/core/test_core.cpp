@@ -2,6 +2,10 @@
 // text helpers and the interrupt flag.
 #include <doctest/doctest.h>
 
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -121,19 +125,51 @@ TEST_CASE("the output guard: never inside an input folder, never over a file nf_
   CHECK_NOTHROW(refuse_output_inside(root / "out", root / "scene", "--out", "scene"));
 
   // A folder holding a file nf_gpu did not write: that file is never claimed.
-  OutputFolder theirs(root / "scene" / "images");
+  OutputFolder theirs(root / "scene" / "images", "render");
   CHECK_THROWS_WITH_AS(theirs.claim("000.png"), doctest::Contains("was not written by nf_gpu"), InputError);
   CHECK(read(root / "scene" / "images" / "000.png") == "the user's photo");
 
-  OutputFolder out(root / "out");
+  OutputFolder out(root / "out", "render");
   const fs::path file = out.claim("000.png");
   std::ofstream(file) << "preview";
-  CHECK(OutputFolder(root / "out").claim("000.png") == file);  // ours: a later run may replace it
+  CHECK(OutputFolder(root / "out", "render").claim("000.png") == file);  // ours: a later run may replace it
   std::ofstream(root / "out" / "notes.txt") << "mine";
-  CHECK_THROWS_AS(OutputFolder(root / "out").claim("notes.txt"), InputError);
+  CHECK_THROWS_AS(OutputFolder(root / "out", "render").claim("notes.txt"), InputError);
+
+  // One result per command and folder: a later render that writes other views removes the earlier
+  // render's, never another command's files nor the user's, nor a name outside the folder.
+  {
+    OutputFolder edit(root / "out", "edit");
+    std::ofstream(edit.claim("fur.hair")) << "groom";
+  }
+  std::ofstream(root / "outside.txt") << "keep";
+  std::ofstream(root / "out" / OutputFolder::kRecordName, std::ios::app) << "../outside.txt\trender\n";
+  OutputFolder again(root / "out", "render");
+  std::ofstream(again.claim("001.png")) << "another view";
+  const std::vector<std::string> removed = again.finish();
+  CHECK(removed == std::vector<std::string>{"000.png"});
+  CHECK_FALSE(fs::exists(root / "out" / "000.png"));
+  CHECK(fs::exists(root / "out" / "001.png"));
+  CHECK(read(root / "out" / "fur.hair") == "groom");  // the edit's
+  CHECK(read(root / "out" / "notes.txt") == "mine");   // the user's
+  CHECK(read(root / "outside.txt") == "keep");
+  CHECK(OutputFolder(root / "out", "render").claim("000.png") == root / "out" / "000.png");  // no longer recorded, gone: free again
+
+  // Temporaries of a run that was killed (its process gone) go; a live process's stay, and another
+  // host's (a shared disk: its pid means nothing here) until it is a day old.
+  const fs::path dead = root / "out" / ".fur.usda.tmp999999999-7", live = root / "out" / (".fur.hair.tmp" + std::to_string(getpid() == 1 ? 2 : 1) + "-7");
+  const fs::path foreign = root / "out" / ".fur.ply.tmp999999998-7@another-host", stale = root / "out" / ".fur.obj.tmp999999998-7@another-host";
+  for (const fs::path& p : {dead, live, foreign, stale}) std::ofstream(p) << "half";
+  fs::last_write_time(stale, fs::file_time_type::clock::now() - std::chrono::hours(25));
+  std::vector<std::string> gone = remove_stale_temporaries(root / "out");
+  std::sort(gone.begin(), gone.end());
+  CHECK(gone == std::vector<std::string>{stale.filename().string(), dead.filename().string()});
+  CHECK(fs::exists(live));  // pid 1 (or 2) is alive
+  CHECK(fs::exists(foreign));
 
   std::ofstream(root / "a_file") << "x";
-  CHECK_THROWS_WITH_AS(OutputFolder(root / "a_file"), doctest::Contains("is an existing file"), InputError);
+  CHECK_THROWS_WITH_AS(OutputFolder(root / "a_file", "render"), doctest::Contains("is an existing file"), InputError);
+  CHECK_THROWS_WITH_AS(OutputFolder(root / "a_file" / "sub", "render"), doctest::Contains("is a file, not a folder"), InputError);
   fs::remove_all(root);
 }
 

@@ -68,6 +68,8 @@ TEST_CASE("the hair's diameter: read in mm, um or prose; no usable answer keeps 
   CHECK(hair_diameter_mm_of(R"({"hair_diameter_mm": 0.07})", "hair") == doctest::Approx(0.07));
   CHECK(hair_diameter_mm_of(R"({"diameter": "70 um"})", "hair") == doctest::Approx(0.07));
   CHECK(hair_diameter_mm_of(R"({"diameter": "0.05"})", "hair") == doctest::Approx(0.05));
+  CHECK(hair_diameter_mm_of(R"({"hair_length_cm": 3, "hair_diameter_um": 60})", "hair") == doctest::Approx(0.06));  // not the length
+  CHECK(hair_diameter_mm_of(R"({"hair": 0.2, "diameter_cm": 0.008})", "hair") == doctest::Approx(0.08));  // the diameter's key first
   CHECK(hair_diameter_mm_of("A cat's guard hair is about 60 \xc2\xb5m across.", "hair") == doctest::Approx(0.06));
   CHECK(hair_diameter_mm_of("Roughly 0.05-0.09 mm.", "hair") == doctest::Approx(0.07));
   CHECK_THROWS_WITH_AS(hair_diameter_mm_of("I cannot tell.", "hair"), doctest::Contains("no diameter"), InputError);
@@ -79,7 +81,7 @@ TEST_CASE("the hair's diameter: read in mm, um or prose; no usable answer keeps 
   CHECK(a.knowledge.hair_diameter_mm == doctest::Approx(kDefaultHairDiameterMm));
   CHECK(std::any_of(a.warnings.begin(), a.warnings.end(), [](const std::string& w) { return w.find("no usable hair diameter") != std::string::npos; }));
   ScriptedModel huge;
-  huge.answers["hair"] = R"({"hair_diameter_mm": 12})";  // a centimetre is no hair
+  huge.answers["hair"] = R"({"hair_diameter_mm": 3})";  // 3 mm: a fur layer's thickness, not a hair
   CHECK(annotate_with_vlm(std::ref(huge), kImages, "test").knowledge.hair_diameter_mm == doctest::Approx(kDefaultHairDiameterMm));
 }
 
