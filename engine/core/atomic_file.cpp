@@ -83,6 +83,7 @@ void write_file_atomic(const std::filesystem::path& path, const std::function<vo
 std::vector<std::string> remove_stale_temporaries(const std::filesystem::path& dir) {
   namespace fs = std::filesystem;
   std::vector<std::string> removed;
+  const std::string here = host_name();
   std::error_code ec;
   for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
     const std::string name = e.path().filename().string();
@@ -94,10 +95,10 @@ std::vector<std::string> remove_stale_temporaries(const std::filesystem::path& d
     if (dash == std::string::npos || (at != std::string::npos && at < dash)) continue;
     const std::string pid_text = tail.substr(0, dash);
     const std::string random_text = tail.substr(dash + 1, at == std::string::npos ? std::string::npos : at - dash - 1);
-    const std::string host = at == std::string::npos ? host_name() : tail.substr(at + 1);
+    const std::string host = at == std::string::npos ? here : tail.substr(at + 1);
     const auto digits = [](const std::string& s) { return !s.empty() && s.find_first_not_of("0123456789") == std::string::npos; };
     if (!digits(pid_text) || !digits(random_text) || pid_text.size() > 9) continue;
-    if (host != host_name()) {
+    if (host != here) {
       const auto age = fs::file_time_type::clock::now() - fs::last_write_time(e.path(), ec);
       if (ec || age < kForeignTemporaryAge) continue;
     } else {

@@ -5,6 +5,7 @@
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/log.hpp"
+#include "engine/core/text.hpp"
 
 namespace nf {
 namespace fs = std::filesystem;
@@ -93,9 +94,7 @@ std::vector<std::string> OutputFolder::finish() {
   }
   if (removed.empty()) return removed;
   save_record();
-  std::string names;
-  for (const std::string& n : removed) names += (names.empty() ? "" : ", ") + n;
-  log::warn("removed from ", dir_.string(), " what an earlier ", command_, " wrote there and this one did not: ", names);
+  log::warn("removed from ", dir_.string(), " what an earlier ", command_, " wrote there and this one did not: ", join(removed));
   return removed;
 }
 

@@ -52,12 +52,12 @@ FileFrame declared_frame(const fs::path& file) {
 namespace {
 
 // The map from the export frame back to the scene's, from the export.json beside `file`.
-glm::dmat4 export_to_scene(const fs::path& file, const fs::path& other) {
+glm::dmat4 export_to_scene(const fs::path& file, const fs::path& other, FileFrame other_frame) {
   const fs::path record = fs::absolute(file).parent_path() / "export.json";
   const std::string advice = "compare files of one frame: WORK/fur/strands.hair or an edit's scene_strands.hair, and WORK/defur/bald.ply, are in the scene's frame";
   if (!fs::exists(record))
     throw InputError(file.string() + " is in " + frame_words(FileFrame::exported) + " and " + other.string() + " in " +
-                     frame_words(declared_frame(other)) + "; no export.json beside it says how to bring it back: " + advice);
+                     frame_words(other_frame) + "; no export.json beside it says how to bring it back: " + advice);
   const json j = read_json_file(record);
   const JsonField root(j, record.string());
   if (j.value("posed", false))
@@ -85,11 +85,12 @@ CommonFrame common_frame(const std::vector<fs::path>& files, bool scene_required
     const auto other = std::find_if(frames.begin(), frames.end(), [](FileFrame f) { return f != FileFrame::exported; });
     const bool alone = other == frames.end();  // every file is in the export frame, and the scene's is required
     const fs::path& with = alone ? files[i] : files[std::size_t(other - frames.begin())];
-    c.to_common.back() = export_to_scene(files[i], with);
+    const FileFrame with_frame = alone ? FileFrame::exported : *other;
+    c.to_common.back() = export_to_scene(files[i], with, with_frame);
     c.moved.back() = true;
     log::info(files[i].string(), " is in ", frame_words(FileFrame::exported), "; brought back into the scene's frame",
               alone ? std::string() : " of " + with.string(), " through the export.json beside it",
-              !alone && declared_frame(with) == FileFrame::unknown ? " (that file states no frame: the scene's is assumed)" : "");
+              with_frame == FileFrame::unknown ? " (that file states no frame: the scene's is assumed)" : "");
   }
   return c;
 }

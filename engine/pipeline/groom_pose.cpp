@@ -67,8 +67,8 @@ json run_pose(const PoseOptions& o) {
   scene.frame = read_export_frame(export_outputs(o.work));
   scene.skeleton = &skeleton;
   scene.hair_diameter_mm = exporter::region_hair_diameter_mm(knowledge, {});
-  if (!o.groom.empty() && fs::exists(o.groom / "edit.json") && io::read_json_file(o.groom / "edit.json").contains("hair_diameter_mm")) {
-    const json e = io::read_json_file(o.groom / "edit.json");  // the edit's hair diameters
+  const json e = o.groom.empty() ? json() : io::read_json_file(o.groom / "edit.json");  // checked to exist above
+  if (e.contains("hair_diameter_mm")) {  // the edit's hair diameters (an edit made before them has none)
     for (int r = 0; r < body::kRegionCount; ++r) {
       const std::string name(body::kRegionNames[std::size_t(r)]);
       const io::JsonField v = io::JsonField(e, (o.groom / "edit.json").string()).at("hair_diameter_mm").at(name);

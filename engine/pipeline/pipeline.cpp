@@ -50,9 +50,7 @@ void parameter_changes(const json& a, const json& b, const std::string& path, st
     return;
   }
   const auto shown = [](const json& v) {
-    std::string text = v.is_null() ? "(none)" : v.dump();
-    std::replace(text.begin(), text.end(), '[', '(');  // a list reads as a tuple: logs before --json output hold no '['
-    std::replace(text.begin(), text.end(), ']', ')');
+    const std::string text = v.is_null() ? "(none)" : v.dump();
     return text.size() > 40 ? text.substr(0, 37) + "..." : text;
   };
   out.push_back(path + " " + shown(a) + " -> " + shown(b));

@@ -306,7 +306,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   const Result again = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + " --to neus --json");
   REQUIRE(again.code == 0);
   REQUIRE(again.output.find('[') != std::string::npos);
-  const nf::json outcome = nf::json::parse(again.output.substr(again.output.find('[')));
+  const nf::json outcome = nf::test::json_of(again);
   CHECK(outcome[0]["stage"] == "neus");
   CHECK(outcome[0]["ran"] == false);  // unchanged: skipped
   CHECK_FALSE(outcome[0].contains("kept"));
@@ -317,7 +317,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
                            " --set body.preview_views=1 --to body --json");
   INFO(later.output);
   REQUIRE(later.code == 0);
-  const nf::json kept = nf::json::parse(later.output.substr(later.output.find('[')));
+  const nf::json kept = nf::test::json_of(later);
   CHECK(kept[0]["ran"] == false);
   CHECK(kept[0]["kept"].get<std::string>().find("made with other settings (") != std::string::npos);
   CHECK(kept[0]["kept"].get<std::string>().find("--from neus remakes it") != std::string::npos);
@@ -335,7 +335,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   const Result fitted = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + body + " --to body --json");
   INFO(fitted.output);
   REQUIRE(fitted.code == 0);
-  const nf::json stages = nf::json::parse(fitted.output.substr(fitted.output.find('[')));
+  const nf::json stages = nf::test::json_of(fitted);
   CHECK(stages[0]["ran"] == false);  // neus: unchanged
   CHECK(stages[1]["stage"] == "body");
   for (const char* f : {"body/outer_regions.ply", "body/fitted.ply", "body/params.json", "body/eyes.json",
@@ -352,7 +352,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   CHECK(truth.contains("eye_error_mm"));
   const Result again_body = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + body + " --from body --to body --json");
   REQUIRE(again_body.code == 0);
-  const nf::json rerun = nf::json::parse(again_body.output.substr(again_body.output.find('[')));
+  const nf::json rerun = nf::test::json_of(again_body);
   CHECK((rerun[0]["ran"] == false && rerun[1]["ran"] == true));  // --from body reruns body, not neus
 
   // The knowledge stage from a preset: the knowledge, world directions and the scale (the synth
@@ -361,7 +361,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
                            " --set knowledge.preset=cat --to knowledge --json");
   INFO(known.output);
   REQUIRE(known.code == 0);
-  const nf::json all = nf::json::parse(known.output.substr(known.output.find('[')));
+  const nf::json all = nf::test::json_of(known);
   REQUIRE(all.size() == 3);
   CHECK((all[0]["ran"] == false && all[1]["ran"] == false && all[2]["ran"] == true));
   const nf::json& ks = all[2]["summary"];
@@ -382,7 +382,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
                             " --set knowledge.preset=cat" + small + " --json");
   INFO(framed.output);
   REQUIRE(framed.code == 0);
-  const nf::json five = nf::json::parse(framed.output.substr(framed.output.find('[')));
+  const nf::json five = nf::test::json_of(framed);
   REQUIRE(five.size() == 7);
   CHECK((five[2]["ran"] == false && five[3]["stage"] == "defur" && five[4]["stage"] == "frames"));
   for (const char* f : {"defur/bald.ply", "defur/vertex_fur.npz", "defur/bald_sdf.npz", "defur/refit.ply", "defur/metrics.json",
@@ -469,13 +469,13 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
                               " --strands 2500 --json");
     INFO(across.output);
     REQUIRE(across.code == 0);
-    const nf::json scored = nf::json::parse(across.output.substr(across.output.find('{')));
+    const nf::json scored = nf::test::json_of(across);
     CHECK(scored["frame"] == "scene");
     CHECK(scored["brought_back_from_export"].size() == 1);
     CHECK(scored["match"][0]["fscore"].get<double>() > 99.9);
     const Result bodies = run("metrics --mesh " + (work / "export" / "body.glb").string() + " --ref " + (work / "defur" / "bald.ply").string() + " --scale 100 --json");
     REQUIRE(bodies.code == 0);
-    CHECK(nf::json::parse(bodies.output.substr(bodies.output.find('{')))["surface"]["chamfer_mm"]["mean"].get<double>() < 0.01);
+    CHECK(nf::test::json_of(bodies)["surface"]["chamfer_mm"]["mean"].get<double>() < 0.01);
     fs::create_directories(root / "lone");
     fs::copy_file(work / "export" / "fur.hair", root / "lone" / "fur.hair", fs::copy_options::overwrite_existing);
     const Result lone = run("metrics --pred " + (root / "lone" / "fur.hair").string() + " --gt " + (work / "fur" / "strands.hair").string());
@@ -617,7 +617,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
                                 small + " --set fur.truth=all --set fur.curve_seconds=0.01 --set fur.select=trained --set fur.patch=40 --to fur --json");
     INFO(truthful.output);
     REQUIRE(truthful.code == 0);
-    const nf::json runs = nf::json::parse(truthful.output.substr(truthful.output.find('[')));
+    const nf::json runs = nf::test::json_of(truthful);
     REQUIRE(runs.size() == 6);
     const nf::json& ts = runs[5]["summary"];
     CHECK(ts["truth"] == "all");
@@ -663,7 +663,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   INFO(hairless.output);
   REQUIRE(hairless.code == 0);
   CHECK(hairless.output.find("no region of the knowledge grows fur") != std::string::npos);
-  const nf::json none = nf::json::parse(hairless.output.substr(hairless.output.find('[')));
+  const nf::json none = nf::test::json_of(hairless);
   CHECK(none[4]["summary"]["roots"] == 0);
   CHECK(none[5]["summary"]["strands"] == 0);  // the fur stage writes an empty groom and says why
   CHECK(none[6]["summary"]["strands"] == 0);  // and the export writes empty groom files beside the body
@@ -685,7 +685,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   }
   const Result fed = run(annotate + " --set knowledge.file=" + edited.string() + " --json");
   REQUIRE(fed.code == 0);
-  const nf::json fed_json = nf::json::parse(fed.output.substr(fed.output.find('{')));
+  const nf::json fed_json = nf::test::json_of(fed);
   CHECK(fed_json["knowledge"]["regions"]["tail"]["length_cm"].get<double>() == doctest::Approx(7.5));
   CHECK(fed_json["knowledge"]["source"] == "file");
   const Result two = run(annotate + " --set knowledge.preset=cat --set knowledge.file=" + edited.string());
@@ -780,7 +780,7 @@ TEST_CASE("reconstruct: neus.mesh takes an envelope of the user's own, checked a
     return run("reconstruct --scene " + scene.string() + " --out " + work.string() + body + " --set neus.mesh=" + mesh.string() +
                " --to " + to + " --json");
   };
-  const auto stages_of = [](const Result& r) { return nf::json::parse(r.output.substr(r.output.find('['))); };
+  const auto stages_of = [](const Result& r) { return nf::test::json_of(r); };
   const Result first = reconstruct(mine, "body");
   INFO(first.output);
   REQUIRE(first.code == 0);

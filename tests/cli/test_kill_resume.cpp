@@ -52,7 +52,7 @@ std::string running_stage(const std::string& log) {
   return start == std::string::npos ? "" : log.substr(start + 6, colon - start - 6);
 }
 
-json summary_of(const std::string& output) { return json::parse(output.substr(output.find('['))); }
+json summary_of(const std::string& output) { return nf::test::json_in(output); }
 
 }  // namespace
 

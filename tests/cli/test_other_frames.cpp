@@ -25,7 +25,7 @@ using namespace nf::test;
 
 namespace {
 
-json stages_of(const Result& r) { return json::parse(r.output.substr(r.output.find('['))); }
+json stages_of(const Result& r) { return nf::test::json_of(r); }
 
 json summary(const json& stages, const std::string& name) {
   for (const json& s : stages)

@@ -13,6 +13,7 @@
 
 #include <doctest/doctest.h>
 
+#include "engine/core/json.hpp"
 #include "tests/support/files.hpp"
 
 namespace nf::test {
@@ -33,6 +34,21 @@ inline Result run(const std::string& args, const std::string& env = "") {
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
 }
+
+// The JSON document a --json command printed: from the first line that opens an array or object
+// (log lines before it may hold brackets of their own).
+inline json json_in(const std::string& output) {
+  std::size_t at = 0;
+  while (at < output.size() && output[at] != '[' && output[at] != '{') {
+    at = output.find('\n', at);
+    if (at == std::string::npos) break;
+    ++at;
+  }
+  INFO("no JSON document in the output:\n", output);
+  REQUIRE((at != std::string::npos && at < output.size()));
+  return json::parse(output.substr(at));
+}
+inline json json_of(const Result& r) { return json_in(r.output); }
 
 // Starts nf_gpu in the background with its output going to `log`.
 inline pid_t spawn(const std::string& args, const std::filesystem::path& log) {
