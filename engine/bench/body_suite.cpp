@@ -85,6 +85,12 @@ json run_body_suite(gpu::Context& ctx, const Options& options) {
         metrics["outer_to_bald_chamfer_mm"] = dg["outer"]["chamfer_mm"]["mean"];
         metrics["outer_to_bald_chamfer_percent_of_diagonal"] = dg["outer"]["chamfer_percent_of_diagonal"];
         if (dg.contains("regions")) metrics["bald_label_accuracy"] = dg["regions"]["accuracy"];
+        // The labels the later stages use: M_NeuS's with the knowledge's mane (the body stage has none).
+        if (dg.contains("regions_outer")) {
+          metrics["fit_label_accuracy"] = metrics.value("label_accuracy", json());
+          metrics["label_accuracy"] = dg["regions_outer"]["accuracy"];
+          metrics["recall"] = dg["regions_outer"]["recall"];
+        }
       }
       std::ifstream fin(pipeline::frames_outputs(work).metrics());
       const json fm = json::parse(fin);

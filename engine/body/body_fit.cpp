@@ -447,6 +447,17 @@ BodyFit refit_body(const BodyModel& model, const geometry::Mesh& world_target, c
   return fit;
 }
 
+std::vector<glm::dvec3> fitted_joints(const BodyModel& model, const BodyFit& fit) {
+  const PoseLayout layout = PoseLayout::of(model, fit.variables.size() == PoseLayout::of(model, true).size());
+  if (fit.variables.size() != layout.size())
+    throw InputError("body fit: " + std::to_string(fit.variables.size()) + " variables, the model needs " + std::to_string(layout.size()));
+  const PoseTrace t = pose_forward(model, layout, fit.variables);
+  std::vector<glm::dvec3> out(model.joint_count());
+  for (std::size_t k = 0; k < out.size(); ++k)
+    out[k] = glm::dvec3(fit.fit_to_world * glm::dvec4(t.scale * (t.rotation * glm::dvec3(t.global[k][3])) + t.translation, 1.0));
+  return out;
+}
+
 FittedEyes fitted_eyes(const BodyModel& model, const BodyFit& fit) {
   glm::dvec3 sum[2]{glm::dvec3(0.0), glm::dvec3(0.0)};
   int count[2]{0, 0};

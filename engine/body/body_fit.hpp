@@ -80,6 +80,9 @@ BodyFit fit_body(const BodyModel& model, const geometry::Mesh& target, const Fra
 BodyFit refit_body(const BodyModel& model, const geometry::Mesh& target, const BodyFit& start,
                    const BodyFitOptions& options, const std::string& source);
 
+// The fit's joint positions, world, in the model's joint order.
+std::vector<glm::dvec3> fitted_joints(const BodyModel& model, const BodyFit& fit);
+
 // Eye centres (world) of a fit: the mean of the eye-region vertices on each side of the animal.
 struct FittedEyes {
   glm::dvec3 left, right;

@@ -33,18 +33,15 @@ RegionAccuracy region_accuracy(const geometry::Mesh& mesh, const geometry::Mesh&
     const double a = 0.5 * glm::length(glm::cross(p(1) - p(0), p(2) - p(0))) / 3.0;
     for (int k = 0; k < 3; ++k) vertex_area[t[k]] += a;
   }
-  const auto same_place = [](std::int32_t region) {
-    return region == region_id(Region::mane) ? region_id(Region::neck) : region;
-  };
   RegionAccuracy r;
   std::array<double, kRegionCount> correct{};
   double total = 0, right = 0;
   for (std::size_t i = 0; i < truth.size(); ++i) {
-    const std::int32_t t = same_place(truth[i]);
+    const std::int32_t t = truth[i];
     if (t < 0 || t >= kRegionCount) continue;
     total += vertex_area[i];
     r.area[std::size_t(t)] += vertex_area[i];
-    if (same_place(mesh.regions[i]) == t) right += vertex_area[i], correct[std::size_t(t)] += vertex_area[i];
+    if (mesh.regions[i] == t) right += vertex_area[i], correct[std::size_t(t)] += vertex_area[i];
   }
   r.accuracy = total > 0 ? right / total : 0;
   for (int k = 0; k < kRegionCount; ++k) {

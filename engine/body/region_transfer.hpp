@@ -22,8 +22,7 @@ struct RegionAccuracy {
 
 // `mesh` carries the labels to judge; the reference labels come from the nearest vertex of
 // `reference` (e.g. the synthetic animal's bald body). Vertex areas are a third of the incident faces'.
-// Mane and neck count as one region on both sides: they are the same place on the body, and which
-// name it takes is the knowledge's call (whether the animal has a mane), not the geometry's.
+// A mane is its own region: labelled where the reference has none, or missed, it counts as wrong.
 RegionAccuracy region_accuracy(const geometry::Mesh& mesh, const geometry::Mesh& reference);
 json to_json(const RegionAccuracy& accuracy);
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "engine/body/mane_labels.hpp"
 #include "engine/body/region_transfer.hpp"
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
@@ -26,7 +27,7 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 1;
+constexpr int kStageVersion = 2;  // 2: the knowledge's mane labelled on M_NeuS and M_bald
 
 DefurSettings settings_of(const StageContext& c) {
   return defur_settings().resolve(c.quality, c.settings.value("defur", json::object()));
@@ -81,10 +82,22 @@ json ground_truth_metrics(const StageContext& c, const geometry::Mesh& bald, con
     return j;
   };
   json out{{"reference", "gt/bald.ply"}, {"bald", against(bald)}, {"outer", against(outer)}, {"diagonal_mm", diagonal_mm}};
-  if (!bald.regions.empty() && !reference.regions.empty()) out["regions"] = body::to_json(body::region_accuracy(bald, reference));
+  if (!bald.regions.empty() && !reference.regions.empty()) {
+    out["regions"] = body::to_json(body::region_accuracy(bald, reference));
+    out["regions_outer"] = body::to_json(body::region_accuracy(outer, reference));  // with the mane, when labelled here
+  }
   log::info("defur: chamfer to gt/bald.ply: M_bald ", out["bald"]["chamfer_mm"]["mean"].get<double>(), " mm, M_NeuS ",
             out["outer"]["chamfer_mm"]["mean"].get<double>(), " mm");
   return out;
+}
+
+// When the knowledge grows a mane, the fitted body's neck and the back of its head become mane on
+// `surface` (body::label_mane): the template has no mane of its own.
+body::ManeLabelling label_mane(const body::BodyModel& model, const body::BodyFit& fit, const geometry::Mesh& fitted,
+                               geometry::Mesh& surface) {
+  const std::optional<body::HeadAxis> head = body::head_axis(model, body::fitted_joints(model, fit));
+  if (!head) log::warn("defur: the body model has no 'head' and 'muzzle' joints: only its neck becomes the mane");
+  return body::label_mane(surface, fitted, head);
 }
 
 }  // namespace
@@ -92,7 +105,8 @@ json ground_truth_metrics(const StageContext& c, const geometry::Mesh& bald, con
 std::vector<fs::path> DefurStage::inputs(const StageContext& c) const {
   const BodyOutputs body = body_outputs(c.work);
   const KnowledgeOutputs k = knowledge_outputs(c.work);
-  std::vector<fs::path> files{body.outer_regions(), body.fit_state(), k.knowledge(), k.directions_world(), k.scale()};
+  std::vector<fs::path> files{body.outer_regions(), body.fitted(), body.animal_frame(), body.fit_state(), k.knowledge(),
+                              k.directions_world(), k.scale()};
   const BodySettings b = body_settings().resolve(c.quality, c.settings.value("body", json::object()));
   if (!b.model.empty()) files.push_back(b.model);
   if (const auto gt = io::find_ground_truth(c.scene_dir))
@@ -119,10 +133,24 @@ json DefurStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) 
   json seconds = json::object();
 
   Stopwatch t;
-  const geometry::Mesh outer = io::read_mesh(body_files.outer_regions());
+  geometry::Mesh outer = io::read_mesh(body_files.outer_regions());
   const knowledge::Knowledge knowledge = knowledge::read_knowledge(k_files.knowledge());
   const double cm = read_metric_scale(k_files);
   seconds["read"] = t.seconds();
+
+  t.restart();
+  const BodySettings b = body_settings().resolve(c.quality, c.settings.value("body", json::object()));
+  const body::BodyModel model = body_model_of(b);
+  const body::BodyFit fit = read_body_fit(body_files, model);
+  const bool has_mane = knowledge.grows_fur(body::Region::mane);
+  json mane;
+  if (has_mane) {
+    const body::ManeLabelling m = label_mane(model, fit, io::read_mesh(body_files.fitted()), outer);
+    log::info("defur: the knowledge grows a mane: ", m.vertices, " vertices of M_NeuS (", 100.0 * m.area_share,
+              " % of its area) on the fitted neck and the back of its head");
+    mane = {{"outer", body::to_json(m)}};
+  }
+  seconds["mane"] = t.seconds();
 
   defur::DefurOptions options;
   options.resolution = s.resolution, options.target_faces = std::uint64_t(s.faces);
@@ -143,11 +171,9 @@ json DefurStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) 
   t.restart();
   json refit_summary;
   if (s.refit) {
-    const BodySettings b = body_settings().resolve(c.quality, c.settings.value("body", json::object()));
-    const body::BodyModel model = body_model_of(b);
-    const body::BodyFit start = read_body_fit(body_files, model);
-    const body::BodyFit refit = body::refit_body(model, bald, start, b.fit, out.bald().string());
+    const body::BodyFit refit = body::refit_body(model, bald, fit, b.fit, out.bald().string());
     bald.regions = body::nearest_regions(bald, refit.fitted);
+    if (has_mane) mane["bald"] = body::to_json(label_mane(model, refit, refit.fitted, bald));
     io::write_mesh_ply(out.refit(), refit.fitted);
     refit_summary = {{"chamfer_mean", refit.chamfer_mean}, {"relative_chamfer", refit.relative_chamfer},
                      {"low_confidence", refit.low_confidence}};
@@ -200,6 +226,7 @@ json DefurStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) 
   summary["bald_sdf"] = {{"dims", {bald_sdf.grid.dims.x, bald_sdf.grid.dims.y, bald_sdf.grid.dims.z}},
                          {"spacing", bald_sdf.grid.voxel}, {"band", bald_sdf.band}};
   summary["masks"] = masks_summary;
+  if (!mane.is_null()) summary["mane"] = mane;
   summary["previews"] = previews.size();
   const json gt = ground_truth_metrics(c, bald, outer);
   if (!gt.is_null()) summary["ground_truth"] = gt;

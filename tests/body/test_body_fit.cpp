@@ -1,6 +1,7 @@
 // The body fit (engine/body/body_fit.hpp): the posing adjoint against finite differences, labels
 // that do not depend on the scene's world frame (rotations about every axis, z-up, x0.01 and x100,
-// far away), and bad input (no faces, NaN, several blobs, a sphere).
+// far away), the knowledge's mane labelled on a fitted lion, and bad input (no faces, NaN, several
+// blobs, a sphere).
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -10,6 +11,7 @@
 
 #include "engine/body/body_fit.hpp"
 #include "engine/body/fit_regularisers.hpp"
+#include "engine/body/mane_labels.hpp"
 #include "engine/body/posing.hpp"
 #include "engine/body/quadruped.hpp"
 #include "engine/body/region_transfer.hpp"
@@ -258,4 +260,40 @@ TEST_CASE("refit to a thinner surface (as M_bald after defurring) starts from th
   CHECK(region_accuracy(labelled, bald).accuracy > 0.85);
   CHECK(glm::length(glm::dvec3(refit.animal_to_world[2]) - glm::dvec3(first.animal_to_world[2])) <
         0.1 * glm::length(glm::dvec3(first.animal_to_world[2])));  // the same frame
+}
+
+TEST_CASE("a mane: the template has none, yet on a fitted lion (z-up, in centimetres) the neck and the back of the head become it") {
+  const BodyModel model = default_template();
+  const glm::dmat4 I(1.0);
+  const glm::dmat4 to_world = glm::scale(I, glm::dvec3(100.0)) * glm::rotate(I, M_PI / 2, glm::dvec3(1, 0, 0));
+  const BodyModel truth = build_quadruped(vary_proportions(animal_proportions("lion"), 4), {});
+  const geometry::Mesh lion = transformed(pose_body(truth, random_pose(truth, 2)), to_world);
+  const BodyFit fit = fit_body(model, lion, FrameHints{glm::dvec3(0, 0, 1)}, quick_fit(), "lion");
+  geometry::Mesh labelled = lion;
+  labelled.regions = nearest_regions(lion, fit.fitted);
+  const RegionAccuracy before = region_accuracy(labelled, lion);
+  CHECK(before.recall[std::size_t(Region::mane)] == doctest::Approx(0.0));  // a mane is its own region
+
+  const std::optional<HeadAxis> head = head_axis(model, fitted_joints(model, fit));
+  REQUIRE(head.has_value());
+  // The head joint sits inside the fitted head, and the muzzle lies ahead of it.
+  double nearest_face = 1e30;
+  for (std::size_t v = 0; v < fit.fitted.vertex_count(); ++v)
+    if (fit.fitted.regions[v] == region_id(Region::face))
+      nearest_face = std::min(nearest_face, glm::distance(glm::dvec3(fit.fitted.position(v)), head->centre));
+  CHECK(nearest_face < 25.0);  // centimetres: within the head's radius
+  const ManeLabelling m = label_mane(labelled, fit.fitted, head);
+  const RegionAccuracy after = region_accuracy(labelled, lion);
+  MESSAGE("lion: mane recall " << 100 * after.recall[std::size_t(Region::mane)] << " %, accuracy " << 100 * before.accuracy
+                               << " -> " << 100 * after.accuracy << " %, mane " << 100 * m.area_share << " % of the area");
+  CHECK(after.recall[std::size_t(Region::mane)] > 0.8);
+  CHECK(after.accuracy > before.accuracy + 0.5 * after.area[std::size_t(Region::mane)]);
+  CHECK(after.recall[std::size_t(Region::ears)] == doctest::Approx(before.recall[std::size_t(Region::ears)]));  // ears stay ears
+  // Without a head axis only the neck becomes mane.
+  geometry::Mesh neck_only = lion;
+  neck_only.regions = nearest_regions(lion, fit.fitted);
+  const ManeLabelling n = label_mane(neck_only, fit.fitted, std::nullopt);
+  CHECK_FALSE(n.head_known);
+  CHECK(n.area_share < m.area_share);
+  CHECK(n.area_share > 0);
 }

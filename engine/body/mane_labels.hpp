@@ -1,0 +1,42 @@
+#pragma once
+// A mane: the region the knowledge adds (preset, file or VLM) but the body template does not
+// carry, labelled on a fitted surface where anatomy puts it: the neck and the head behind its
+// centre, as the procedural family labels a maned animal. Whether the animal has one is the
+// knowledge's call. The surface's own stand-off from the fit does not say where a mane is: the fit
+// follows the fur layer (its shape space widens the neck, its offsets do the rest), so on a lion of
+// `nf_gpu synth` the mane stands no further off the fit than the shoulders (docs/method.md, the defur stage).
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "engine/body/body_model.hpp"
+#include "engine/core/json.hpp"
+#include "engine/geometry/mesh.hpp"
+
+namespace nf::body {
+
+struct HeadAxis {
+  glm::dvec3 centre;   // the head joint, world
+  glm::dvec3 forward;  // towards the muzzle (unit)
+};
+
+// The head joint and the direction to the muzzle joint of a model posed as `joints` (world); none
+// when the model names no "head" and "muzzle" joints (a user's SMAL file may not).
+std::optional<HeadAxis> head_axis(const BodyModel& model, const std::vector<glm::dvec3>& joints);
+
+struct ManeLabelling {
+  std::uint64_t vertices = 0;  // surface vertices labelled mane
+  double area_share = 0;       // their share of the surface's area
+  bool head_known = false;     // false: the fit has no head axis, so only the neck became mane
+};
+
+// Labels `surface` (its regions from `fitted`, e.g. M_NeuS or M_bald) with Region::mane where its
+// nearest vertex of `fitted` is on the neck, or on the face behind the head's centre. Only neck
+// and face vertices of the surface change.
+ManeLabelling label_mane(geometry::Mesh& surface, const geometry::Mesh& fitted, const std::optional<HeadAxis>& head);
+
+json to_json(const ManeLabelling& labelling);
+
+}  // namespace nf::body
