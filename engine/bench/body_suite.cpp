@@ -63,13 +63,14 @@ json run_body_suite(gpu::Context& ctx, const Options& options) {
         metrics["recall"] = gt.at("recall");
         if (gt.contains("eye_error_mm")) metrics["eye_error_mm"] = gt["eye_error_mm"];
       }
-      // The paper's metric scale (preset eye distance over the fitted eyes' distance) against the
-      // scene's true unit, and the fitted eye distance alone against the body's true one.
+      // The metric scale's cues (the paper's: preset eye distance over the fitted eyes' distance; the
+      // body length's) and their combination against the scene's true unit, and the fitted eye
+      // distance alone against the body's true one.
       std::ifstream kin(pipeline::knowledge_outputs(work).metrics());
       const json km = json::parse(kin);
       if (km.contains("ground_truth")) {
         const json& kg = km["ground_truth"];
-        for (const char* key : {"scale_from_eyes_error", "eye_distance_error", "frame_error_degrees"})
+        for (const char* key : {"scale_from_eyes_error", "scale_from_cues_error", "scale_cue_errors", "eye_distance_error", "frame_error_degrees"})
           if (kg.contains(key)) metrics[key] = kg[key];
       }
       // De-furring against the true bald body, and the frames against the true growth.

@@ -423,7 +423,7 @@ double length_cm_of(const json& value, const std::string& where) {
   throw InputError(where + ": " + quoted(value) + " is not a length (expected a number of cm, e.g. 2.5)");
 }
 
-glm::vec3 direction_of(const json& value, const std::string& where) {
+glm::vec3 direction_of(const json& value, const std::string& where, bool allow_zero) {
   glm::dvec3 d(0.0);
   if (value.is_array()) {
     if (value.size() != 3) throw InputError(where + ": " + quoted(value) + " is not 3 numbers [x, y, z]");
@@ -443,7 +443,7 @@ glm::vec3 direction_of(const json& value, const std::string& where) {
         }
       }();
       if (!list) throw InputError(where + ": " + quoted(value) + " is not a direction [x, y, z]");
-      return direction_of(*list, where);
+      return direction_of(*list, where, allow_zero);
     }
     const std::optional<glm::vec3> words = axis_words(s);
     if (!words) throw InputError(where + ": " + quoted(value) + " is not a direction (expected [x, y, z] or words like 'down')");
@@ -453,7 +453,10 @@ glm::vec3 direction_of(const json& value, const std::string& where) {
   }
   for (int c = 0; c < 3; ++c)
     if (!std::isfinite(d[c]) || std::fabs(d[c]) > 1e6) throw InputError(where + ": " + quoted(value) + " is not finite and of a sane size");
-  if (glm::length(d) < 1e-6) throw InputError(where + ": " + quoted(value) + " is the zero vector, which has no direction");
+  if (glm::length(d) < 1e-6) {
+    if (allow_zero) return glm::vec3(0.0f);
+    throw InputError(where + ": " + quoted(value) + " is the zero vector, which has no direction");
+  }
   return glm::vec3(glm::normalize(d));
 }
 
@@ -464,15 +467,19 @@ RegionValues<double> region_lengths(const json& object, const std::vector<std::s
 }
 
 RegionValues<glm::vec3> region_directions(const json& object, const std::string& where) {
-  return per_region<glm::vec3>(object, {"direction", "dir", "vector", "growth"}, {"length", "thick"}, "direction", where,
-                               [](const json& v, const std::string& at) { return direction_of(v, at); });
+  RegionValues<glm::vec3> v = per_region<glm::vec3>(object, {"direction", "dir", "vector", "growth"}, {"length", "thick"}, "direction",
+                                                    where, [](const json& d, const std::string& at) { return direction_of(d, at, true); });
+  // [0, 0, 0] is how a model says "no direction" (a bald region's): not given, the fill rules decide.
+  std::erase_if(v.values, [](const auto& e) { return glm::length(e.second) == 0.0f; });
+  return v;
 }
 
 namespace {
 
-// The first number (or range) in prose followed by a unit of length, in cm. A plain scan: a regex
-// would recurse over an answer of megabytes.
-std::optional<double> first_length_cm_in_prose(const std::string& text) {
+// The first number (or range) in prose followed by a unit of length, in cm; metres only when asked
+// (an animal's length), since "m" in prose about eyes or hairs is rarely a unit. A plain scan: a
+// regex would recurse over an answer of megabytes.
+std::optional<double> first_length_cm_in_prose(const std::string& text, bool metres = false) {
   for (std::size_t i = 0; i < text.size(); ++i) {
     if (!std::isdigit(static_cast<unsigned char>(text[i])) || (i > 0 && (std::isdigit(static_cast<unsigned char>(text[i - 1])) || text[i - 1] == '.')))
       continue;
@@ -496,7 +503,8 @@ std::optional<double> first_length_cm_in_prose(const std::string& text) {
     while (word_end < text.size() && std::isalpha(static_cast<unsigned char>(text[word_end]))) ++word_end;
     const std::string unit = to_lower(text.substr(end, word_end - end));
     if (unit == "cm" || unit == "mm" || unit == "um" || unit == "\xc2\xb5m" || unit == "\xce\xbcm" || unit.rfind("centimet", 0) == 0 ||
-        unit.rfind("millimet", 0) == 0 || unit.rfind("micro", 0) == 0 || unit.rfind("inch", 0) == 0)
+        unit.rfind("millimet", 0) == 0 || unit.rfind("micro", 0) == 0 || unit.rfind("inch", 0) == 0 ||
+        (metres && (unit == "m" || unit.rfind("metre", 0) == 0 || unit.rfind("meter", 0) == 0)))
       if (const std::optional<double> cm = length_text_cm(text.substr(i, word_end - i))) return *cm;
   }
   return std::nullopt;
@@ -511,6 +519,15 @@ double eye_distance_cm_of(const std::string& text, const std::string& where) {
         return length_cm_of(value, where + ": " + key);
   if (const std::optional<double> cm = first_length_cm_in_prose(text)) return *cm;
   throw InputError(where + ": the answer gives no distance in cm");
+}
+
+double body_length_cm_of(const std::string& text, const std::string& where) {
+  for (const FoundObject& o : find_objects(text))
+    for (const auto& [key, value] : o.value.items())
+      if (key_has_any(key, {"length", "body"}) && !key_has_any(key, {"tail"}) && (value.is_number() || value.is_string()))
+        return length_cm_of(value, where + ": " + key);
+  if (const std::optional<double> cm = first_length_cm_in_prose(text, true)) return *cm;  // a lion's is 1.9 m
+  throw InputError(where + ": the answer gives no length in cm");
 }
 
 double hair_diameter_mm_of(const std::string& text, const std::string& where) {

@@ -34,8 +34,9 @@ std::optional<body::Region> match_region(const std::string& name);
 double length_cm_of(const json& value, const std::string& where);
 
 // A direction from [x, y, z], {"x":..,"y":..,"z":..}, "(0, -1, 0)" or an axis word ("down", "-y",
-// "forward"...). Throws InputError "<where>: ..." when it is none of these, not finite or zero.
-glm::vec3 direction_of(const json& value, const std::string& where);
+// "forward"...), normalised. Throws InputError "<where>: ..." when it is none of these, not finite,
+// or zero (with `allow_zero`, zero comes back as the zero vector).
+glm::vec3 direction_of(const json& value, const std::string& where, bool allow_zero = false);
 
 // Per-region values of one answer.
 template <class T>
@@ -60,5 +61,8 @@ double eye_distance_cm_of(const std::string& text, const std::string& where);
 // A hair's diameter in mm from the answer to the hair prompt: a JSON field (a bare number is mm) or
 // the first length with a unit in prose (mm, um, cm).
 double hair_diameter_mm_of(const std::string& text, const std::string& where);
+// The head-and-body length in cm from the answer to the body prompt: a JSON field whose name has
+// "length" or "body" (not "tail") in it, else the first length with a unit in the text.
+double body_length_cm_of(const std::string& text, const std::string& where);
 
 }  // namespace nf::knowledge

@@ -29,6 +29,13 @@ Consensus consensus(const std::vector<Knowledge>& samples) {
   for (const Knowledge& k : samples) hairs.push_back(k.hair_diameter_mm);
   out.knowledge.hair_diameter_mm = float(median(hairs));
   out.spread["hair_diameter_mm"] = {*std::min_element(hairs.begin(), hairs.end()), *std::max_element(hairs.begin(), hairs.end())};
+  std::vector<double> bodies;
+  for (const Knowledge& k : samples)
+    if (k.body_length_cm) bodies.push_back(*k.body_length_cm);
+  if (2 * bodies.size() > samples.size()) {  // kept when most answers give it, as a region
+    out.knowledge.body_length_cm = float(median(bodies));
+    out.spread["body_length_cm"] = {*std::min_element(bodies.begin(), bodies.end()), *std::max_element(bodies.begin(), bodies.end())};
+  }
 
   for (int i = 0; i < body::kRegionCount; ++i) {
     std::vector<double> lengths, thickness, region_hairs;

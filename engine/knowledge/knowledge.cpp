@@ -55,6 +55,8 @@ Knowledge knowledge_from_json(const json& j, const std::string& source) {
   k.eye_distance_cm = finite_number(j["eye_distance_cm"], source + ": eye_distance_cm", 0.01f, 1000.0f);
   // Optional: files written before it existed read with the default.
   if (j.contains("hair_diameter_mm")) k.hair_diameter_mm = finite_number(j["hair_diameter_mm"], source + ": hair_diameter_mm", kMinHairMm, kMaxHairMm);
+  if (j.contains("body_length_cm") && !j["body_length_cm"].is_null())
+    k.body_length_cm = finite_number(j["body_length_cm"], source + ": body_length_cm", kMinBodyLengthCm, kMaxBodyLengthCm);
   if (!j.contains("regions") || !j["regions"].is_object()) throw InputError(source + ": missing object 'regions'");
   for (const auto& [name, entry] : j["regions"].items()) {
     const std::string where = source + ": regions." + name;
@@ -76,8 +78,9 @@ Knowledge knowledge_from_json(const json& j, const std::string& source) {
     if (!d.is_array() || d.size() != 3) throw InputError(where + ".direction must be an array of 3 numbers");
     for (int c = 0; c < 3; ++c) r.direction[c] = finite_number(d[c], where + ".direction[" + std::to_string(c) + "]", -1e6f, 1e6f);
     const float len = glm::length(r.direction);
-    if (!(len > 1e-6f)) throw InputError(where + ".direction is the zero vector");
-    r.direction /= len;
+    if (len > 1e-6f) r.direction /= len;
+    else if (r.length_cm == 0) r.direction = {0, -1, 0};  // a bald region's "no direction": nothing grows along it
+    else throw InputError(where + ".direction is the zero vector, but the region grows " + std::to_string(r.length_cm) + " cm of fur");
     if (entry.contains("hair_diameter_mm")) r.hair_diameter_mm = finite_number(entry["hair_diameter_mm"], where + ".hair_diameter_mm", kMinHairMm, kMaxHairMm);
     k.regions[std::size_t(*region)] = r;
   }
@@ -97,6 +100,7 @@ json knowledge_to_json(const Knowledge& k) {
           {"source", k.source},
           {"eye_distance_cm", k.eye_distance_cm},
           {"hair_diameter_mm", k.hair_diameter_mm},
+          {"body_length_cm", k.body_length_cm ? json(*k.body_length_cm) : json()},
           {"regions", regions}};
 }
 

@@ -22,6 +22,8 @@ inline constexpr float kDefaultHairDiameterMm = 0.08f;
 // A furry animal's hair is 5 um (fine underfur) to 2 mm (an elephant's); a larger answer is a
 // length or the fur layer's thickness, not a hair.
 inline constexpr float kMinHairMm = 0.005f, kMaxHairMm = 2.f;
+// A mouse's head and body (5 cm) to an elephant's (7.5 m).
+inline constexpr float kMinBodyLengthCm = 5.f, kMaxBodyLengthCm = 750.f;
 
 struct RegionKnowledge {
   float length_cm = 0, thickness_cm = 0;
@@ -34,6 +36,9 @@ struct Knowledge {
   std::string source;  // "preset:<name>", "vlm:<model>" or "file"
   float eye_distance_cm = 0;
   float hair_diameter_mm = kDefaultHairDiameterMm;  // a hair at its root, where no region says otherwise
+  // A typical adult's head-and-body length (nose tip to the tail's root), when known: a second
+  // metric-scale cue beside the eyes (knowledge/metric_scale.hpp).
+  std::optional<float> body_length_cm;
   std::array<std::optional<RegionKnowledge>, body::kRegionCount> regions;
 
   // The region's entry; throws InputError naming the region when the file lacks it.

@@ -4,36 +4,96 @@
 #include <sstream>
 
 #include "engine/core/error.hpp"
+#include "engine/core/text.hpp"
 
 namespace nf::knowledge {
+namespace {
 
-MetricScale metric_scale(double eye_cm, double eye_units, std::optional<double> scene_declared, std::optional<double> user_given) {
+bool positive(double v) { return std::isfinite(v) && v > 0; }
+
+std::string percent(double relative) { return std::to_string(std::lround(100.0 * std::fabs(relative))) + " %"; }
+
+std::string describe(const ScaleCue& c) {
+  std::ostringstream m;
+  m << "the " << c.name << " (" << c.cm_per_unit << ": " << c.detail << ")";
+  return m.str();
+}
+
+}  // namespace
+
+MetricScale metric_scale(const ScaleInputs& in) {
   MetricScale s;
-  if (std::isfinite(eye_cm) && std::isfinite(eye_units) && eye_cm > 0 && eye_units > 0) s.from_eyes = eye_cm / eye_units;
-  if (user_given) s.cm_per_unit = *user_given, s.source = "--scene-scale";
-  else if (scene_declared) s.cm_per_unit = *scene_declared, s.source = "scene";
-  else if (s.from_eyes) s.cm_per_unit = *s.from_eyes, s.source = "eyes";
-  if (!(std::isfinite(s.cm_per_unit) && s.cm_per_unit > 0))
-    throw InputError("knowledge: no metric scale: the fitted body's eyes are " + std::to_string(eye_units) +
-                     " scene units apart and the eye distance is " + std::to_string(eye_cm) +
-                     " cm; give the scale with --scene-scale CM_PER_UNIT");
-  if (s.from_eyes && s.source != "eyes") {
-    s.disagreement = s.cm_per_unit / *s.from_eyes - 1.0;
-    if (std::fabs(*s.disagreement) > 0.2) {
-      std::ostringstream m;
-      m << "the scale from " << (s.source == "scene" ? "the scene file" : "--scene-scale") << " (" << s.cm_per_unit
-        << " cm per unit) and the one from the eyes (" << *s.from_eyes << ": " << eye_cm << " cm over " << eye_units
-        << " units) differ by " << std::lround(100.0 * std::fabs(*s.disagreement))
-        << " %; check the scene's unit or the knowledge's eye_distance_cm";
-      s.warning = m.str();
-    }
+  if (positive(in.eye_distance_cm) && positive(in.eye_distance_units)) {
+    std::ostringstream d;
+    d << in.eye_distance_cm << " cm over " << in.eye_distance_units << " units";
+    s.cues.push_back({"eyes", in.eye_distance_cm / in.eye_distance_units, kEyeCueSpread, d.str()});
+    s.from_eyes = s.cues.back().cm_per_unit;
   }
+  if (in.body_length_cm && in.body_length_units && positive(*in.body_length_cm) && positive(*in.body_length_units)) {
+    std::ostringstream d;
+    d << *in.body_length_cm << " cm of head and body over " << *in.body_length_units << " units";
+    s.cues.push_back({"body length", *in.body_length_cm / *in.body_length_units, kBodyLengthCueSpread, d.str()});
+  }
+  // Inverse-variance weights in log space: the cue that may be off the least counts the most.
+  if (!s.cues.empty()) {
+    double sum_w = 0, sum = 0;
+    std::vector<std::string> names;
+    for (const ScaleCue& c : s.cues) {
+      const double w = 1.0 / (c.spread * c.spread);
+      sum_w += w, sum += w * std::log(c.cm_per_unit);
+      names.push_back(c.name);
+    }
+    s.from_cues = std::exp(sum / sum_w);
+    s.spread = 1.0 / std::sqrt(sum_w);
+    s.source = join(names, " + ");
+    s.cm_per_unit = *s.from_cues;
+  }
+  if (in.user_given) s.cm_per_unit = *in.user_given, s.source = "--scene-scale", s.spread = 0;
+  else if (in.scene_declared) s.cm_per_unit = *in.scene_declared, s.source = "scene", s.spread = 0;
+  if (!positive(s.cm_per_unit))
+    throw InputError("knowledge: no metric scale: the fitted body's eyes are " + std::to_string(in.eye_distance_units) +
+                     " scene units apart and the eye distance is " + std::to_string(in.eye_distance_cm) +
+                     " cm; give the scale with --scene-scale CM_PER_UNIT");
+
+  std::vector<std::string> problems;
+  if (s.spread == 0 && s.from_cues) {  // a given unit: each cue checked against it
+    s.disagreement = s.cm_per_unit / *s.from_cues - 1.0;
+    const std::string given = s.source == "scene" ? "the scene file" : "--scene-scale";
+    for (const ScaleCue& c : s.cues) {
+      const double off = s.cm_per_unit / c.cm_per_unit - 1.0;
+      if (std::fabs(off) > 0.2) {
+        std::ostringstream m;
+        m << "the scale from " << given << " (" << s.cm_per_unit << " cm per unit) and " << describe(c) << " differ by "
+          << percent(off);
+        problems.push_back(m.str());
+      }
+    }
+    if (!problems.empty()) problems.back() += "; check the scene's unit or the knowledge's eye_distance_cm and body_length_cm";
+  } else {
+    // Two cues further apart than their spreads together allow: one of them is wrong.
+    for (std::size_t a = 0; a < s.cues.size(); ++a)
+      for (std::size_t b = a + 1; b < s.cues.size(); ++b) {
+        const ScaleCue &x = s.cues[a], &y = s.cues[b];
+        if (std::fabs(std::log(x.cm_per_unit / y.cm_per_unit)) > std::hypot(x.spread, y.spread)) {
+          std::ostringstream m;
+          m << describe(x) << " and " << describe(y) << " differ by " << percent(x.cm_per_unit / y.cm_per_unit - 1.0)
+            << ", more than they may (" << percent(std::hypot(x.spread, y.spread)) << "): the scale " << s.cm_per_unit
+            << " may be off by more than its " << percent(s.spread) << "; give --scene-scale if you know it";
+          problems.push_back(m.str());
+        }
+      }
+  }
+  s.warning = join(problems, "; ");
   return s;
 }
 
 json to_json(const MetricScale& s) {
-  json j{{"cm_per_unit", s.cm_per_unit}, {"source", s.source}};
+  json cues = json::array();
+  for (const ScaleCue& c : s.cues)
+    cues.push_back({{"cue", c.name}, {"cm_per_unit", c.cm_per_unit}, {"spread", c.spread}, {"from", c.detail}});
+  json j{{"cm_per_unit", s.cm_per_unit}, {"source", s.source}, {"spread", s.spread}, {"cues", cues}};
   j["from_eyes"] = s.from_eyes ? json(*s.from_eyes) : json();
+  j["from_cues"] = s.from_cues ? json(*s.from_cues) : json();
   if (s.disagreement) j["disagreement"] = *s.disagreement;
   if (!s.warning.empty()) j["warning"] = s.warning;
   return j;

@@ -54,6 +54,12 @@ const std::vector<Prompt>& paper_prompts() {
        "What is the diameter of a single hair of this animal's coat, at its root, in millimetres? Use the real-world "
        "understanding of this animal class.",
        "one JSON object, {\"hair_diameter_mm\": number}."},
+      // Not the paper's: a second cue for the metric scale beside the eyes (metric_scale.hpp).
+      {"body",
+       "What is the typical head-and-body length of an adult of this animal, from the tip of the nose to the base of "
+       "the tail (the tail not included), in centimetres? Use the real-world understanding of this animal class, and "
+       "of its breed if you can tell it.",
+       "one JSON object, {\"body_length_cm\": number}."},
   };
   return prompts;
 }

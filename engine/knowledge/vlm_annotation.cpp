@@ -136,7 +136,7 @@ bool read_verification(const std::string& text, PartialKnowledge& k, std::vector
 Annotation annotate_with_vlm(const ChatFunction& chat, const AnnotationImages& images, const std::string& where) {
   Annotation out;
   PartialKnowledge k;
-  std::optional<double> eye_cm;
+  std::optional<double> eye_cm, body_cm;
   double hair_mm = kDefaultHairDiameterMm;
   json messages = json::array({{{"role", "system"}, {"content", system_prompt()}}});
   bool first = true;
@@ -193,6 +193,11 @@ Annotation annotate_with_vlm(const ChatFunction& chat, const AnnotationImages& i
           if (!(mm >= kMinHairMm && mm <= kMaxHairMm))
             throw InputError(at + ": hair_diameter_mm = " + num(mm) + " is outside " + num(kMinHairMm) + "-" + num(kMaxHairMm) + " mm");
           hair_mm = mm;
+        } else if (prompt.step == "body") {
+          const double cm = body_length_cm_of(answer, at);
+          if (!(cm >= kMinBodyLengthCm && cm <= kMaxBodyLengthCm))
+            throw InputError(at + ": body_length_cm = " + num(cm) + " is outside " + num(kMinBodyLengthCm) + "-" + num(kMaxBodyLengthCm) + " cm");
+          body_cm = cm;
         } else {
           const double cm = eye_distance_cm_of(answer, at);
           if (!(cm >= kMinEyeCm && cm <= kMaxEyeCm))
@@ -203,6 +208,11 @@ Annotation annotate_with_vlm(const ChatFunction& chat, const AnnotationImages& i
       } catch (const InputError& e) {
         if (attempt > 0 && prompt.step == "hair") {  // only the export's widths hang on it
           out.warnings.push_back("no usable hair diameter in the answers (" + std::string(e.what()) + "): " + num(kDefaultHairDiameterMm) + " mm");
+          break;
+        }
+        if (attempt > 0 && prompt.step == "body") {  // one of the scale's cues; the eyes remain
+          out.warnings.push_back("no usable head-and-body length in the answers (" + std::string(e.what()) +
+                                 "): the metric scale rests on the eyes");
           break;
         }
         if (attempt > 0) throw;
@@ -216,6 +226,7 @@ Annotation annotate_with_vlm(const ChatFunction& chat, const AnnotationImages& i
   out.knowledge = fill_missing_regions(k, out.warnings, where);
   out.knowledge.eye_distance_cm = float(*eye_cm);
   out.knowledge.hair_diameter_mm = float(hair_mm);
+  if (body_cm) out.knowledge.body_length_cm = float(*body_cm);
   return out;
 }
 

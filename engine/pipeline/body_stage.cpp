@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "engine/body/posing.hpp"
+#include "engine/body/body_measures.hpp"
 #include "engine/body/region_transfer.hpp"
 #include "engine/body/smal_model.hpp"
 #include "engine/core/atomic_file.hpp"
@@ -22,7 +23,7 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 2;  // 2: fit.json
+constexpr int kStageVersion = 3;  // 2: fit.json; 3: the head-and-body length
 
 BodySettings settings_of(const StageContext& c) {
   return body_settings().resolve(c.quality, c.settings.value("body", json::object()));
@@ -63,6 +64,14 @@ json ground_truth_metrics(const StageContext& c, const geometry::Mesh& labelled,
 glm::dmat4 read_animal_to_world(const BodyOutputs& o) {
   const json j = io::read_json_file(o.animal_frame());
   return io::matrix_rows(io::JsonField(j, o.animal_frame().string()).at("animal_to_world"));
+}
+
+std::optional<double> read_head_and_body_length(const BodyOutputs& o) {
+  const json j = io::read_json_file(o.animal_frame());
+  const std::optional<io::JsonField> d = io::JsonField(j, o.animal_frame().string()).find("head_and_body_length");
+  if (!d || d->value().is_null()) return std::nullopt;
+  if (!(std::isfinite(d->number()) && d->number() > 0)) d->fail("expected a positive length");
+  return d->number();
 }
 
 double read_eye_distance(const BodyOutputs& o) {
@@ -142,7 +151,9 @@ json BodyStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) {
                                     .dump(2) + "\n");
   const glm::dmat4& a = fit.animal_to_world;
   const double scale = glm::length(glm::dvec3(a[0]));
+  const std::optional<double> body_length = body::head_and_body_length(model, body::fitted_joints(model, fit));
   write_file_atomic(out.animal_frame(), json{{"animal_to_world", json_matrix_rows(a)},
+                                             {"head_and_body_length", body_length ? json(*body_length) : json()},
                                              {"origin", json_vec3(glm::dvec3(a[3]))},
                                              {"left", json_vec3(glm::dvec3(a[0]) / scale)},
                                              {"up", json_vec3(glm::dvec3(a[1]) / scale)},

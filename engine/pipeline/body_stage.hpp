@@ -3,6 +3,7 @@
 // body_fit.hpp), its regions moved onto M_NeuS by nearest vertex, the eye centres and the animal
 // frame. Its files are BodyOutputs below; its settings are declared in body_settings()
 // (`nf_gpu reconstruct --help-stage body`).
+#include <optional>
 #include <string>
 
 #include <glm/glm.hpp>
@@ -29,6 +30,8 @@ inline BodyOutputs body_outputs(const std::filesystem::path& work) { return {wor
 // InputError naming the file and field when one is malformed.
 glm::dmat4 read_animal_to_world(const BodyOutputs& outputs);
 double read_eye_distance(const BodyOutputs& outputs);
+// The fitted head-and-body length in scene units; none when the model's joints do not give it.
+std::optional<double> read_head_and_body_length(const BodyOutputs& outputs);
 // The fit's variables and frame (what body::refit_body starts from; the posed meshes are not
 // rebuilt). InputError naming the file and field when it is malformed or does not match `model`.
 body::BodyFit read_body_fit(const BodyOutputs& outputs, const body::BodyModel& model);

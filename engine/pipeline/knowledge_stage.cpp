@@ -26,7 +26,7 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 1;
+constexpr int kStageVersion = 2;  // 2: the body length as a second scale cue
 
 KnowledgeSettings settings_of(const StageContext& c) {
   return knowledge_settings().resolve(c.quality, c.settings.value("knowledge", json::object()));
@@ -213,6 +213,8 @@ json ground_truth_metrics(const StageContext& c, const knowledge::MetricScale& s
   if (!gt) return json();
   json out{{"cm_per_unit", gt->cm_per_unit}, {"scale_error", scale.cm_per_unit / gt->cm_per_unit - 1.0}};
   if (scale.from_eyes) out["scale_from_eyes_error"] = *scale.from_eyes / gt->cm_per_unit - 1.0;
+  if (scale.from_cues) out["scale_from_cues_error"] = *scale.from_cues / gt->cm_per_unit - 1.0;
+  for (const knowledge::ScaleCue& cue : scale.cues) out["scale_cue_errors"][cue.name] = cue.cm_per_unit / gt->cm_per_unit - 1.0;
   const io::JsonField info(gt->info, gt->scene_json().string());
   if (const auto eye = info.find("eye_distance_cm")) out["eye_distance_error"] = eye_units * gt->cm_per_unit / eye->number() - 1.0;
   if (const auto rows = info.find("animal_to_world")) {
@@ -291,6 +293,7 @@ json KnowledgeStage::run(StageContext& c, const fs::path& out_dir, const fs::pat
 
   const glm::dmat4 animal_to_world = read_animal_to_world(body);
   const double eye_units = read_eye_distance(body);
+  const std::optional<double> body_length_units = read_head_and_body_length(body);
 
   knowledge::Knowledge k;
   std::vector<std::string> warnings;
@@ -321,15 +324,23 @@ json KnowledgeStage::run(StageContext& c, const fs::path& out_dir, const fs::pat
   write_file_atomic(out.directions_world(), json{{"frame", "world (the scene's axes), through WORK/body/animal_frame.json"},
                                                  {"directions", world}}.dump(2) + "\n");
 
-  const knowledge::MetricScale scale = knowledge::metric_scale(
-      k.eye_distance_cm, eye_units, c.scene.cm_per_unit, s.cm_per_unit > 0 ? std::optional<double>(s.cm_per_unit) : std::nullopt);
+  knowledge::ScaleInputs scale_inputs;
+  scale_inputs.eye_distance_cm = k.eye_distance_cm, scale_inputs.eye_distance_units = eye_units;
+  if (k.body_length_cm) scale_inputs.body_length_cm = *k.body_length_cm;
+  scale_inputs.body_length_units = body_length_units;
+  scale_inputs.scene_declared = c.scene.cm_per_unit;
+  if (s.cm_per_unit > 0) scale_inputs.user_given = s.cm_per_unit;
+  const knowledge::MetricScale scale = knowledge::metric_scale(scale_inputs);
   if (!scale.warning.empty()) warnings.push_back(scale.warning);
   json scale_json = knowledge::to_json(scale);
   scale_json["eye_distance_cm"] = k.eye_distance_cm;
   scale_json["eye_distance_units"] = eye_units;
   write_file_atomic(out.scale(), scale_json.dump(2) + "\n");
-  log::info("knowledge: ", scale.cm_per_unit, " cm per scene unit (from ", scale.source, ")",
-            scale.from_eyes && scale.source != "eyes" ? "; the eyes say " + std::to_string(*scale.from_eyes) : std::string());
+  std::string cue_text;
+  for (const knowledge::ScaleCue& cue : scale.cues)
+    cue_text += "; the " + cue.name + (cue.name == "eyes" ? " say " : " says ") + std::to_string(cue.cm_per_unit);
+  log::info("knowledge: ", scale.cm_per_unit, " cm per scene unit (from ", scale.source,
+            scale.spread > 0 ? ", +-" + std::to_string(std::lround(100 * scale.spread)) + " %" : std::string(), ")", cue_text);
 
   for (const std::string& w : warnings) log::warn("knowledge: ", w);
   summary["scale"] = scale_json;

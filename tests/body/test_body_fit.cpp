@@ -10,6 +10,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "engine/body/body_fit.hpp"
+#include "engine/body/body_measures.hpp"
 #include "engine/body/fit_regularisers.hpp"
 #include "engine/body/mane_labels.hpp"
 #include "engine/body/posing.hpp"
@@ -262,7 +263,7 @@ TEST_CASE("refit to a thinner surface (as M_bald after defurring) starts from th
         0.1 * glm::length(glm::dvec3(first.animal_to_world[2])));  // the same frame
 }
 
-TEST_CASE("a mane: the template has none, yet on a fitted lion (z-up, in centimetres) the neck and the back of the head become it") {
+TEST_CASE("a fitted lion (z-up, in centimetres): its head-and-body length, and the knowledge's mane on the neck and the back of the head") {
   const BodyModel model = default_template();
   const glm::dmat4 I(1.0);
   const glm::dmat4 to_world = glm::scale(I, glm::dvec3(100.0)) * glm::rotate(I, M_PI / 2, glm::dvec3(1, 0, 0));
@@ -282,6 +283,16 @@ TEST_CASE("a mane: the template has none, yet on a fitted lion (z-up, in centime
     if (fit.fitted.regions[v] == region_id(Region::face))
       nearest_face = std::min(nearest_face, glm::distance(glm::dvec3(fit.fitted.position(v)), head->centre));
   CHECK(nearest_face < 25.0);  // centimetres: within the head's radius
+  // The head-and-body length (a metric-scale cue): every segment of its path joins a joint to its
+  // parent, so the truth's rest pose gives it, in centimetres through the x100.
+  std::vector<glm::dvec3> rest(truth.joint_count());
+  for (std::size_t j = 0; j < rest.size(); ++j) rest[j] = 100.0 * glm::dvec3(truth.joint_template[3 * j], truth.joint_template[3 * j + 1], truth.joint_template[3 * j + 2]);
+  const std::optional<double> true_length = head_and_body_length(truth, rest);
+  const std::optional<double> fitted_length = head_and_body_length(model, fitted_joints(model, fit));
+  REQUIRE(true_length.has_value());
+  REQUIRE(fitted_length.has_value());
+  MESSAGE("head and body: fitted " << *fitted_length << " cm, true " << *true_length << " cm");
+  CHECK(*fitted_length == doctest::Approx(*true_length).epsilon(0.1));
   const ManeLabelling m = label_mane(labelled, fit.fitted, head);
   const RegionAccuracy after = region_accuracy(labelled, lion);
   MESSAGE("lion: mane recall " << 100 * after.recall[std::size_t(Region::mane)] << " %, accuracy " << 100 * before.accuracy

@@ -8,7 +8,7 @@
 
 namespace nf::test {
 
-// The step the last user message asks: length, thickness, verify, direction, eyes, hair, or retry.
+// The step the last user message asks: length, thickness, verify, direction, eyes, hair, body, or retry.
 inline std::string prompt_step(const json& messages) {
   std::string text;
   for (const json& m : messages)
@@ -26,6 +26,7 @@ inline std::string prompt_step(const json& messages) {
   if (text.find("fur growing direction") != std::string::npos) return "direction";
   if (text.find("distance between eyeballs") != std::string::npos) return "eyes";
   if (text.find("diameter of a single hair") != std::string::npos) return "hair";
+  if (text.find("head-and-body length") != std::string::npos) return "body";
   return "unknown";
 }
 
@@ -51,6 +52,7 @@ inline std::map<std::string, std::string> good_answers() {
                       "inner_earcanal": [0, 1, 0], "eyes": [0, 0, 1], "nosetip": [0, 0, 1], "mane": [0, -0.7, -0.7]})"},
       {"eyes", R"({"eye_distance_cm": 3.2})"},
       {"hair", R"({"hair_diameter_mm": 0.06})"},
+      {"body", R"({"body_length_cm": 46})"},
   };
 }
 

@@ -86,7 +86,10 @@ TEST_CASE("bad knowledge names the region and the field") {
   CHECK_THROWS_WITH_AS(knowledge_from_json(j, "k.json"), doctest::Contains("regions.tail.length_cm"), InputError);
   j = base();
   j["regions"]["tail"]["direction"] = {0, 0, 0};
-  CHECK_THROWS_WITH_AS(knowledge_from_json(j, "k.json"), doctest::Contains("direction is the zero vector"), InputError);
+  CHECK_THROWS_WITH_AS(knowledge_from_json(j, "k.json"), doctest::Contains("direction is the zero vector, but the region grows"), InputError);
+  // A bald region's [0, 0, 0] is a normal answer: nothing grows along it.
+  j["regions"]["tail"]["length_cm"] = 0.0, j["regions"]["tail"]["thickness_cm"] = 0.0;
+  CHECK(knowledge_from_json(j, "k.json").at(Region::tail).direction == glm::vec3(0, -1, 0));
   j = base();
   j["regions"]["tail"]["direction"] = {0, "up", 0};
   CHECK_THROWS_WITH_AS(knowledge_from_json(j, "k.json"), doctest::Contains("direction[1]"), InputError);

@@ -36,13 +36,13 @@ const AnnotationImages kImages{"data:image/jpeg;base64,AAAA", "data:image/jpeg;b
 
 }  // namespace
 
-TEST_CASE("the paper's five prompts and the hair's, one conversation, the photos first") {
+TEST_CASE("the paper's five prompts, the hair's and the body length's, one conversation, the photos first") {
   ScriptedModel model;
   const Annotation a = annotate_with_vlm(std::ref(model), kImages, "test");
-  REQUIRE(model.requests.size() == 6);
-  CHECK(model.steps == std::vector<std::string>{"length", "thickness", "verify", "direction", "eyes", "hair"});
+  REQUIRE(model.requests.size() == 7);
+  CHECK(model.steps == std::vector<std::string>{"length", "thickness", "verify", "direction", "eyes", "hair", "body"});
   // Each request carries everything before it: the system prompt, the questions and the answers.
-  for (std::size_t i = 0; i < 6; ++i) CHECK(model.requests[i].size() == 2 + 2 * i);
+  for (std::size_t i = 0; i < 7; ++i) CHECK(model.requests[i].size() == 2 + 2 * i);
   CHECK(model.requests[0][0]["role"] == "system");
   const json& first = model.requests[0][1]["content"];
   REQUIRE(first.is_array());
@@ -61,7 +61,25 @@ TEST_CASE("the paper's five prompts and the hair's, one conversation, the photos
   CHECK_FALSE(k.grows_fur(Region::eyes));
   CHECK(glm::length(k.at(Region::neck).direction) == doctest::Approx(1.0));
   CHECK(k.hair_diameter_mm == doctest::Approx(0.06));
-  CHECK(a.requests == 6);
+  REQUIRE(k.body_length_cm.has_value());
+  CHECK(*k.body_length_cm == doctest::Approx(46));
+  CHECK(a.requests == 7);
+}
+
+TEST_CASE("the head-and-body length: read in cm, m or prose, never a tail's; no usable answer leaves the eyes alone with a warning") {
+  CHECK(body_length_cm_of(R"({"body_length_cm": 46})", "body") == doctest::Approx(46));
+  CHECK(body_length_cm_of(R"({"tail_length_cm": 30, "head_and_body_length": "0.5 m"})", "body") == doctest::Approx(50));
+  CHECK(body_length_cm_of("An adult lion measures 1.9 m from nose to tail base.", "body") == doctest::Approx(190));
+  CHECK_THROWS_WITH_AS(body_length_cm_of("Hard to say.", "body"), doctest::Contains("no length"), InputError);
+  ScriptedModel vague;
+  vague.answers["body"] = "It depends on the breed.";
+  const Annotation a = annotate_with_vlm(std::ref(vague), kImages, "test");
+  CHECK(a.requests == 8);  // asked once more, then none
+  CHECK_FALSE(a.knowledge.body_length_cm.has_value());
+  CHECK(std::any_of(a.warnings.begin(), a.warnings.end(), [](const std::string& w) { return w.find("rests on the eyes") != std::string::npos; }));
+  ScriptedModel huge;
+  huge.answers["body"] = R"({"body_length_cm": 4000})";
+  CHECK_FALSE(annotate_with_vlm(std::ref(huge), kImages, "test").knowledge.body_length_cm.has_value());
 }
 
 TEST_CASE("the hair's diameter: read in mm, um or prose; no usable answer keeps the default with a warning") {
@@ -77,7 +95,7 @@ TEST_CASE("the hair's diameter: read in mm, um or prose; no usable answer keeps 
   ScriptedModel vague;
   vague.answers["hair"] = "It depends on the breed.";
   const Annotation a = annotate_with_vlm(std::ref(vague), kImages, "test");
-  CHECK(a.requests == 7);  // asked once more, then the default
+  CHECK(a.requests == 8);  // asked once more, then the default
   CHECK(a.knowledge.hair_diameter_mm == doctest::Approx(kDefaultHairDiameterMm));
   CHECK(std::any_of(a.warnings.begin(), a.warnings.end(), [](const std::string& w) { return w.find("no usable hair diameter") != std::string::npos; }));
   ScriptedModel huge;
@@ -101,12 +119,21 @@ TEST_CASE("an unusable answer is asked again once, then refused with the region 
     return calls == 1 ? std::string("I think the fur is long.") : fixed(messages, step);
   };
   const Annotation a = annotate_with_vlm(chat, kImages, "test");
-  CHECK(a.requests == 7);
+  CHECK(a.requests == 8);
   CHECK(std::any_of(a.warnings.begin(), a.warnings.end(), [](const std::string& w) { return w.find("asked again") != std::string::npos; }));
 
+  // [0, 0, 0] is "no direction": on the bald eyes it passes silently, on the furred body the body
+  // takes the fill rule's direction (down) with a warning naming it, and the stage goes on.
   ScriptedModel zero;
-  zero.answers["direction"] = R"({"body": [0, 0, 0], "tail": [0, 0, -1]})";
-  CHECK_THROWS_WITH_AS(annotate_with_vlm(std::ref(zero), kImages, "test"), doctest::Contains("regions.body.direction"), InputError);
+  zero.answers["direction"] = R"({"body": [0, 0, 0], "tail": [0, 0, -1], "eyes": [0, 0, 0], "nosetip": [0, 0, 0]})";
+  const Annotation z = annotate_with_vlm(std::ref(zero), kImages, "test");
+  CHECK(z.requests == 7);  // not asked again
+  CHECK(z.knowledge.at(Region::body).direction == glm::vec3(0, -1, 0));
+  CHECK(z.knowledge.at(Region::tail).direction == glm::vec3(0, 0, -1));
+  const auto zero_warning = std::find_if(z.warnings.begin(), z.warnings.end(), [](const std::string& w) { return w.find("no direction") != std::string::npos; });
+  REQUIRE(zero_warning != z.warnings.end());
+  CHECK(zero_warning->find("body <- down") != std::string::npos);
+  CHECK(zero_warning->find("eyes") == std::string::npos);
   ScriptedModel far;
   far.answers["eyes"] = "About 120 cm.";
   CHECK_THROWS_WITH_AS(annotate_with_vlm(std::ref(far), kImages, "test"), doctest::Contains("eye_distance_cm = 120"), InputError);
@@ -161,19 +188,57 @@ TEST_CASE("consensus: median lengths, mean directions, flagged disagreement") {
   CHECK(c.spread["body"]["length_cm"][1] == doctest::Approx(5.0));
 }
 
+namespace {
+MetricScale scale_of(double eye_cm, double eye_units, std::optional<double> declared, std::optional<double> given,
+                     std::optional<double> body_cm = std::nullopt, std::optional<double> body_units = std::nullopt) {
+  ScaleInputs in;
+  in.eye_distance_cm = eye_cm, in.eye_distance_units = eye_units, in.scene_declared = declared, in.user_given = given;
+  in.body_length_cm = body_cm, in.body_length_units = body_units;
+  return metric_scale(in);
+}
+}  // namespace
+
 TEST_CASE("metric scale: given beats declared beats the eyes; a disagreement is a warning") {
-  const MetricScale eyes = metric_scale(3.2, 0.04, std::nullopt, std::nullopt);
+  const MetricScale eyes = scale_of(3.2, 0.04, std::nullopt, std::nullopt);
   CHECK(eyes.source == "eyes");
   CHECK(eyes.cm_per_unit == doctest::Approx(80.0));
-  const MetricScale declared = metric_scale(3.2, 0.04, 100.0, std::nullopt);
+  CHECK(eyes.spread == doctest::Approx(kEyeCueSpread));
+  const MetricScale declared = scale_of(3.2, 0.04, 100.0, std::nullopt);
   CHECK(declared.source == "scene");
   CHECK(declared.cm_per_unit == doctest::Approx(100.0));
+  CHECK(declared.spread == 0);
   CHECK(*declared.disagreement == doctest::Approx(0.25));
   CHECK(declared.warning.find("25 %") != std::string::npos);
-  const MetricScale given = metric_scale(3.2, 0.04, 100.0, 85.0);
+  const MetricScale given = scale_of(3.2, 0.04, 100.0, 85.0);
   CHECK(given.source == "--scene-scale");
   CHECK(given.warning.empty());  // 6 % apart
-  CHECK_THROWS_WITH_AS(metric_scale(3.2, 0.0, std::nullopt, std::nullopt), doctest::Contains("--scene-scale"), InputError);
+  CHECK_THROWS_WITH_AS(scale_of(3.2, 0.0, std::nullopt, std::nullopt), doctest::Contains("--scene-scale"), InputError);
+}
+
+TEST_CASE("metric scale: the eyes and the body length combine by their spreads; cues too far apart are a warning") {
+  // Eyes say 80 cm per unit (spread 25 %), the body length 100 (spread 15 %): the combination lies
+  // nearer the body length, in log space with weights 1/spread^2, and is surer than either.
+  const MetricScale both = scale_of(3.2, 0.04, std::nullopt, std::nullopt, 46.0, 0.46);
+  REQUIRE(both.cues.size() == 2);
+  CHECK(both.source == "eyes + body length");
+  const double we = 1 / (kEyeCueSpread * kEyeCueSpread), wb = 1 / (kBodyLengthCueSpread * kBodyLengthCueSpread);
+  CHECK(both.cm_per_unit == doctest::Approx(std::exp((we * std::log(80.0) + wb * std::log(100.0)) / (we + wb))));
+  CHECK(both.cm_per_unit > 90.0);
+  CHECK(both.spread < kBodyLengthCueSpread);
+  CHECK(both.warning.empty());  // 25 % apart: within sqrt(0.25^2 + 0.15^2) = 29 %
+  // The eyes say 50, half the body length's 100: beyond what the two spreads allow.
+  const MetricScale apart = scale_of(3.2, 0.064, std::nullopt, std::nullopt, 46.0, 0.46);
+  CHECK(apart.warning.find("differ by 50 %") != std::string::npos);
+  CHECK(apart.warning.find("--scene-scale") != std::string::npos);
+  // A declared unit wins, and a cue 30 % off it is named.
+  const MetricScale declared = scale_of(3.2, 0.032, 100.0, std::nullopt, 46.0, 0.3538);
+  CHECK(declared.cm_per_unit == doctest::Approx(100.0));
+  CHECK(declared.warning.find("the body length") != std::string::npos);
+  CHECK(declared.warning.find("the eyes") == std::string::npos);
+  // No eyes, only the body length.
+  const MetricScale body = scale_of(3.2, 0.0, std::nullopt, std::nullopt, 190.0, 1.9);
+  CHECK(body.source == "body length");
+  CHECK(body.cm_per_unit == doctest::Approx(100.0));
 }
 
 TEST_CASE("hostile answers: mutated, deeply nested or huge, they end in a value or an InputError") {
@@ -235,7 +300,7 @@ TEST_CASE("the verification answer: each dict is the field named last before it;
   content.answers["verify"] = "Yes, I am confident the estimates are right.";
   a = annotate_with_vlm(std::ref(content), kImages, "test");
   CHECK(a.knowledge.at(Region::body).length_cm == doctest::Approx(1.0));  // the length answer's
-  CHECK(a.requests == 7);  // asked once more
+  CHECK(a.requests == 8);  // asked once more
   CHECK(std::any_of(a.warnings.begin(), a.warnings.end(), [](const std::string& w) { return w.find("earlier ones stand") != std::string::npos; }));
 
   ScriptedModel no_body;

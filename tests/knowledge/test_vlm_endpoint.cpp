@@ -246,7 +246,7 @@ TEST_CASE("knowledge stage with a VLM: a good annotation, its transcript, the ca
 
   // The request: a system prompt, the two photos as JPEG data URLs, the paper's first prompt.
   const auto requests = server.requests();
-  REQUIRE(requests.size() == 6);
+  REQUIRE(requests.size() == 7);
   const json& first = requests[0]["messages"][1]["content"];
   CHECK(first[0]["image_url"]["url"].get<std::string>().rfind("data:image/jpeg;base64,/9j/", 0) == 0);
   CHECK(first[1]["image_url"]["url"].get<std::string>().rfind("data:image/jpeg;base64,/9j/", 0) == 0);
@@ -256,7 +256,7 @@ TEST_CASE("knowledge stage with a VLM: a good annotation, its transcript, the ca
   CHECK(metrics["vlm"]["photos"]["frontal"] == "cam0");
   const std::string side = metrics["vlm"]["photos"]["side"];
   CHECK((side == "cam1" || side == "cam3"));
-  CHECK(metrics["vlm"]["requests_sent"] == 6);
+  CHECK(metrics["vlm"]["requests_sent"] == 7);
   CHECK(k.hair_diameter_mm == doctest::Approx(0.06));
   CHECK(fs::file_size(out.images() / "side_axes.jpg") > 100);
 
@@ -269,7 +269,7 @@ TEST_CASE("knowledge stage with a VLM: a good annotation, its transcript, the ca
 
   // The transcript: one line per request, every answer, no key and no image bytes.
   const std::string transcript = read_text(out.transcript());
-  CHECK(std::count(transcript.begin(), transcript.end(), '\n') == 6);
+  CHECK(std::count(transcript.begin(), transcript.end(), '\n') == 7);
   CHECK(transcript.find("SECRET") == std::string::npos);
   CHECK(transcript.find("base64") == std::string::npos);
   CHECK(transcript.find("images/side_axes.jpg") != std::string::npos);
@@ -277,7 +277,7 @@ TEST_CASE("knowledge stage with a VLM: a good annotation, its transcript, the ca
 
   // A rerun costs nothing: every answer from the cache, the same knowledge.
   r.run(server, {}, "knowledge");
-  CHECK(server.requests().size() == 6);
+  CHECK(server.requests().size() == 7);
   const std::string again = read_text(out.transcript());
   CHECK(again.find("\"cached\":false") == std::string::npos);
   CHECK(read_knowledge(out.knowledge()).at(Region::body).length_cm == doctest::Approx(1.1));
@@ -360,12 +360,12 @@ TEST_CASE("knowledge stage with a VLM: the consensus of three annotations") {
   const double body_lengths[3] = {1.0, 1.2, 4.0};
   test::ChatServer server([&](const json& request, int index) {
     std::map<std::string, std::string> answers = test::good_answers();
-    answers["length"] = R"({"body": )" + std::to_string(body_lengths[std::min(index / 6, 2)]) + R"(, "tail": 1.3})";
+    answers["length"] = R"({"body": )" + std::to_string(body_lengths[std::min(index / 7, 2)]) + R"(, "tail": 1.3})";
     answers["verify"] = R"({"thickness": {"body": 0.3}})";
     return model(answers)(request, index);
   });
   r.run(server, {"knowledge.samples=3"});
-  CHECK(server.requests().size() == 18);
+  CHECK(server.requests().size() == 21);
   const pipeline::KnowledgeOutputs out = pipeline::knowledge_outputs(r.work);
   CHECK(read_knowledge(out.knowledge()).at(Region::body).length_cm == doctest::Approx(1.2));
   const json consensus = json::parse(read_text(out.consensus()));
