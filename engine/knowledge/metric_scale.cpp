@@ -25,8 +25,9 @@ MetricScale metric_scale(const ScaleInputs& in) {
   MetricScale s;
   if (positive(in.eye_distance_cm) && positive(in.eye_distance_units)) {
     std::ostringstream d;
-    d << in.eye_distance_cm << " cm over " << in.eye_distance_units << " units";
-    s.cues.push_back({"eyes", in.eye_distance_cm / in.eye_distance_units, kEyeCueSpread, d.str()});
+    d << in.eye_distance_cm << " cm over " << in.eye_distance_units << " units (" << (in.eyes_from_photos ? "the photos'" : "the fit's")
+      << " eyes)";
+    s.cues.push_back({"eyes", in.eye_distance_cm / in.eye_distance_units, in.eyes_from_photos ? kPhotoEyeCueSpread : kEyeCueSpread, d.str()});
     s.from_eyes = s.cues.back().cm_per_unit;
   }
   if (in.body_length_cm && in.body_length_units && positive(*in.body_length_cm) && positive(*in.body_length_units)) {

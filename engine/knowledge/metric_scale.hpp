@@ -15,10 +15,12 @@
 namespace nf::knowledge {
 
 // How far each cue may be off, relative (one standard deviation of its log). The eyes: an
-// individual's eye distance differs from its kind's by about 10 %, and the fitted eyes of animals
-// nf_gpu never made were 20-40 % too far apart (issue 42's measurements). The body length: adults
-// of a kind differ by about 15 %, and a fit's skeleton follows the surface to within a few percent.
-inline constexpr double kEyeCueSpread = 0.25, kBodyLengthCueSpread = 0.15;
+// individual's eye distance differs from its kind's by about 10 %, and the fitted template's eyes
+// of animals nf_gpu never made were 20-40 % too far apart (issue 42's measurements); eyes
+// triangulated in the photos were 15 % off their true distance (RMS over ten synthetic scenes at
+// 256-512 px), and the individual's 10 % adds to that. The body length: adults of a kind differ by
+// about 15 %, and a fit's skeleton follows the surface to a few percent.
+inline constexpr double kEyeCueSpread = 0.25, kPhotoEyeCueSpread = 0.18, kBodyLengthCueSpread = 0.15;
 
 struct ScaleCue {
   std::string name;        // "eyes" or "body length"
@@ -29,6 +31,7 @@ struct ScaleCue {
 
 struct ScaleInputs {
   double eye_distance_cm = 0, eye_distance_units = 0;
+  bool eyes_from_photos = false;  // triangulated in the photos (else the fitted template's)
   std::optional<double> body_length_cm, body_length_units;
   std::optional<double> scene_declared, user_given;
 };

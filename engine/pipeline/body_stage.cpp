@@ -6,6 +6,8 @@
 
 #include "engine/body/posing.hpp"
 #include "engine/body/body_measures.hpp"
+#include "engine/body/mane_labels.hpp"
+#include "engine/body/photo_eyes.hpp"
 #include "engine/body/region_transfer.hpp"
 #include "engine/body/smal_model.hpp"
 #include "engine/core/atomic_file.hpp"
@@ -23,7 +25,7 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 3;  // 2: fit.json; 3: the head-and-body length
+constexpr int kStageVersion = 4;  // 2: fit.json; 3: the head-and-body length; 4: the eyes from the photos
 
 BodySettings settings_of(const StageContext& c) {
   return body_settings().resolve(c.quality, c.settings.value("body", json::object()));
@@ -38,7 +40,52 @@ body::FrameHints frame_hints(const io::Scene& scene) {
   return hints;
 }
 
-json ground_truth_metrics(const StageContext& c, const geometry::Mesh& labelled, const body::FittedEyes& eyes) {
+// The eyes: found in the photos and triangulated when every view's detections agree, else the
+// fitted template's (with a warning). eyes.json keeps both and how the photos' were found.
+struct EyesFound {
+  glm::dvec3 left, right;
+  json record;
+};
+
+EyesFound eyes_of(const io::Scene& scene, const body::BodyModel& model, const body::BodyFit& fit, const std::vector<glm::dvec3>& joints,
+                  const body::FittedEyes& fitted, bool from_photos) {
+  EyesFound out{fitted.left, fitted.right, json::object()};
+  const json fitted_json{{"left", json_vec3(fitted.left)}, {"right", json_vec3(fitted.right)}, {"distance", glm::distance(fitted.left, fitted.right)}};
+  out.record = {{"unit", "scene units"}, {"fitted", fitted_json}, {"source", "fit"}};
+  const std::optional<body::HeadAxis> head = body::head_axis(model, joints);
+  if (from_photos && head) {
+    // The eyeball's radius: the eye region's mean distance from its centre, on each side.
+    double sum = 0;
+    std::size_t n = 0;
+    for (std::size_t v = 0; v < fit.fitted.vertex_count(); ++v)
+      if (fit.fitted.regions[v] == body::region_id(body::Region::eyes)) {
+        const glm::dvec3 p(fit.fitted.position(v));
+        sum += std::min(glm::distance(p, fitted.left), glm::distance(p, fitted.right)), ++n;
+      }
+    const body::EyeSearch search{fitted.left, fitted.right, head->centre, n ? sum / double(n) : 0.0};
+    const body::PhotoEyes found = body::find_eyes_in_photos(scene, search);
+    out.record["photos"] = {{"left", body::to_json(found.left, scene.cameras)},
+                            {"right", body::to_json(found.right, scene.cameras)},
+                            {"views_facing", found.views_facing},
+                            {"eye_radius", search.eye_radius}};
+    if (found.distance()) {
+      out.left = *found.left.position, out.right = *found.right.position;
+      out.record["source"] = "photos";
+      log::info("body: the eyes found in the photos: ", found.left.views.size(), " and ", found.right.views.size(), " views, ",
+                found.left.reprojection_rms_px, " and ", found.right.reprojection_rms_px, " px reprojection error; ",
+                *found.distance(), " units apart (the fit's ", glm::distance(fitted.left, fitted.right), ")");
+    } else {
+      log::warn("body: the eyes were not found in the photos (left: ", found.left.reason.empty() ? "found" : found.left.reason,
+                "; right: ", found.right.reason.empty() ? "found" : found.right.reason, "): the fitted template's eyes stand");
+    }
+  }
+  out.record["left"] = json_vec3(out.left);
+  out.record["right"] = json_vec3(out.right);
+  out.record["distance"] = glm::distance(out.left, out.right);
+  return out;
+}
+
+json ground_truth_metrics(const StageContext& c, const geometry::Mesh& labelled, const body::FittedEyes& fitted, const EyesFound& eyes) {
   const std::optional<io::GroundTruth> gt = io::find_ground_truth(c.scene_dir);
   if (!gt || !fs::exists(gt->bald())) return json();
   const geometry::Mesh bald = io::read_mesh(gt->bald());
@@ -54,12 +101,23 @@ json ground_truth_metrics(const StageContext& c, const geometry::Mesh& labelled,
     const double mm = gt->cm_per_unit * 10.0;
     out["eye_error_mm"] = {{"left", glm::distance(eyes.left, point(eyes_gt["left"])) * mm},
                            {"right", glm::distance(eyes.right, point(eyes_gt["right"])) * mm}};
+    out["fitted_eye_error_mm"] = {{"left", glm::distance(fitted.left, point(eyes_gt["left"])) * mm},
+                                  {"right", glm::distance(fitted.right, point(eyes_gt["right"])) * mm}};
+    const double true_distance = glm::distance(point(eyes_gt["left"]), point(eyes_gt["right"]));
+    out["eye_distance_error"] = glm::distance(eyes.left, eyes.right) / true_distance - 1.0;
+    out["fitted_eye_distance_error"] = glm::distance(fitted.left, fitted.right) / true_distance - 1.0;
+    out["eyes_from"] = eyes.record["source"];
   }
   log::info("body: labels on M_NeuS agree with the ground truth on ", 100.0 * accuracy.accuracy, " % of the surface");
   return out;
 }
 
 }  // namespace
+
+bool read_eyes_from_photos(const BodyOutputs& o) {
+  const json j = io::read_json_file(o.eyes());
+  return j.value("source", std::string()) == "photos";
+}
 
 glm::dmat4 read_animal_to_world(const BodyOutputs& o) {
   const json j = io::read_json_file(o.animal_frame());
@@ -143,15 +201,15 @@ json BodyStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) {
   io::write_mesh_ply(out.outer_regions(), target);
   io::write_mesh_ply(out.fitted(), fit.fitted);
 
-  const body::FittedEyes eyes = body::fitted_eyes(model, fit);
-  write_file_atomic(out.eyes(), json{{"left", json_vec3(eyes.left)},
-                                     {"right", json_vec3(eyes.right)},
-                                     {"distance", glm::distance(eyes.left, eyes.right)},
-                                     {"unit", "scene units"}}
-                                    .dump(2) + "\n");
+  const std::vector<glm::dvec3> joints = body::fitted_joints(model, fit);
+  const body::FittedEyes fitted_eyes = body::fitted_eyes(model, fit);
+  const auto t_eyes = std::chrono::steady_clock::now();
+  const EyesFound eyes = eyes_of(c.scene, model, fit, joints, fitted_eyes, s.photo_eyes != 0);
+  const double eye_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_eyes).count();
+  write_file_atomic(out.eyes(), eyes.record.dump(2) + "\n");
   const glm::dmat4& a = fit.animal_to_world;
   const double scale = glm::length(glm::dvec3(a[0]));
-  const std::optional<double> body_length = body::head_and_body_length(model, body::fitted_joints(model, fit));
+  const std::optional<double> body_length = body::head_and_body_length(model, joints);
   write_file_atomic(out.animal_frame(), json{{"animal_to_world", json_matrix_rows(a)},
                                              {"head_and_body_length", body_length ? json(*body_length) : json()},
                                              {"origin", json_vec3(glm::dvec3(a[3]))},
@@ -210,10 +268,12 @@ json BodyStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) {
                {"relative_chamfer", fit.relative_chamfer},
                {"low_confidence", fit.low_confidence},
                {"eye_distance", glm::distance(eyes.left, eyes.right)},
+               {"eyes_from", eyes.record["source"]},
+               {"eye_seconds", eye_seconds},
                {"previews", previews.size()},
                {"preview_seconds", preview_seconds},
                {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()}};
-  const json gt = ground_truth_metrics(c, target, eyes);
+  const json gt = ground_truth_metrics(c, target, fitted_eyes, eyes);
   if (!gt.is_null()) summary["ground_truth"] = gt;
   write_file_atomic(out.metrics(), summary.dump(2) + "\n");
   return summary;
@@ -257,6 +317,8 @@ const SettingsSchema<BodySettings>& body_settings() {
              "joint limit in radians")
         .add("seed", [](B& b) -> auto& { return b.fit.seed; }, 0, 4294967295.0, "sampling seed")
         .add("preview_views", [](B& b) -> auto& { return b.preview_views; }, 0, 16, "region-coloured preview renders")
+        .add("photo_eyes", [](B& b) -> auto& { return b.photo_eyes; }, 0, 1,
+             "find the eyes in the photos and triangulate them (else the fitted template's eyes)")
         .text("model", [](B& b) -> auto& { return b.model; }, {},
               "a SMAL-layout .npz (tools/smal_to_npz.py); empty: the built-in quadruped family");
     return s;

@@ -30,6 +30,8 @@ inline BodyOutputs body_outputs(const std::filesystem::path& work) { return {wor
 // InputError naming the file and field when one is malformed.
 glm::dmat4 read_animal_to_world(const BodyOutputs& outputs);
 double read_eye_distance(const BodyOutputs& outputs);
+// Whether eyes.json's eyes were found in the photos (else they are the fitted template's).
+bool read_eyes_from_photos(const BodyOutputs& outputs);
 // The fitted head-and-body length in scene units; none when the model's joints do not give it.
 std::optional<double> read_head_and_body_length(const BodyOutputs& outputs);
 // The fit's variables and frame (what body::refit_body starts from; the posed meshes are not
@@ -40,6 +42,7 @@ struct BodySettings {
   body::BodyFitOptions fit;
   std::string model;  // "" (the built-in quadruped family) or a SMAL-layout .npz
   int preview_views = 2;
+  int photo_eyes = 0;  // find the eyes in the photos (else the fit's); off: on synth scenes no better than the fit (docs/method.md)
 };
 const SettingsSchema<BodySettings>& body_settings();
 // The body model a run's settings name (the built-in family or a SMAL file).

@@ -26,7 +26,7 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 2;  // 2: the body length as a second scale cue
+constexpr int kStageVersion = 3;  // 2: the body length as a second scale cue; 3: the photos' eyes
 
 KnowledgeSettings settings_of(const StageContext& c) {
   return knowledge_settings().resolve(c.quality, c.settings.value("knowledge", json::object()));
@@ -326,6 +326,7 @@ json KnowledgeStage::run(StageContext& c, const fs::path& out_dir, const fs::pat
 
   knowledge::ScaleInputs scale_inputs;
   scale_inputs.eye_distance_cm = k.eye_distance_cm, scale_inputs.eye_distance_units = eye_units;
+  scale_inputs.eyes_from_photos = read_eyes_from_photos(body);
   if (k.body_length_cm) scale_inputs.body_length_cm = *k.body_length_cm;
   scale_inputs.body_length_units = body_length_units;
   scale_inputs.scene_declared = c.scene.cm_per_unit;

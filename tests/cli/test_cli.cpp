@@ -370,8 +370,33 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   CHECK(ks["scale"]["cm_per_unit"].get<double>() == doctest::Approx(100.0));
   CHECK(ks["scale"]["from_eyes"].get<double>() > 0.0);
   CHECK(ks["ground_truth"].contains("scale_from_eyes_error"));
+  // Both of the animal's scale cues, each with its spread, and their errors against the truth.
+  REQUIRE(ks["scale"]["cues"].size() == 2);
+  CHECK(ks["scale"]["cues"][0]["cue"] == "eyes");
+  CHECK(ks["scale"]["cues"][1]["cue"] == "body length");
+  CHECK(ks["scale"]["spread"].get<double>() == 0.0);  // the scene's unit is given
+  CHECK(ks["ground_truth"]["scale_cue_errors"].contains("body length"));
+  CHECK(nf::json::parse(slurp(work / "body" / "eyes.json"))["source"] == "fit");
   for (const char* f : {"knowledge/knowledge.json", "knowledge/directions_world.json", "knowledge/scale.json", "knowledge/metrics.json"})
     CHECK_MESSAGE(fs::exists(work / f), f);
+  {
+    // The eyes searched in the photos (in a copy, so the later stages keep their cache): found and
+    // triangulated, or the fit's kept with the reason; the record says which.
+    const fs::path eyes_work = work.string() + "-eyes";
+    fs::remove_all(eyes_work);
+    fs::copy(work, eyes_work, fs::copy_options::recursive);
+    const Result eyes_run = run("reconstruct --scene " + scene.string() + " --out " + eyes_work.string() + tiny + body +
+                                " --set body.photo_eyes=1 --from body --to body --json");
+    INFO(eyes_run.output);
+    REQUIRE(eyes_run.code == 0);
+    const nf::json eyes = nf::json::parse(slurp(eyes_work / "body" / "eyes.json"));
+    REQUIRE(eyes.contains("photos"));
+    CHECK(eyes["photos"]["views_facing"].get<int>() >= 0);  // this scene's 64 px views may resolve no eye
+    for (const char* side : {"left", "right"})
+      CHECK((eyes["photos"][side]["position"].is_array() || eyes["photos"][side].contains("reason")));
+    CHECK((eyes["source"] == "photos" || eyes_run.output.find("the eyes were not found in the photos") != std::string::npos));
+    fs::remove_all(eyes_work);
+  }
 
   // Defur and frames on the cached stages: M_bald inside M_NeuS, its files, the masks, the roots.
   const std::string small = " --set defur.resolution=64 --set defur.preview_views=1 --set frames.roots=3000"

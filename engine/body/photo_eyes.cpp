@@ -1,0 +1,266 @@
+#include "engine/body/photo_eyes.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "engine/core/log.hpp"
+#include "engine/io/image.hpp"
+
+namespace nf::body {
+namespace {
+
+// Sums over axis-aligned boxes of a window of the image (and of its mask), in O(1) per box.
+class BoxSums {
+ public:
+  BoxSums(const FaceImage& image, int x0, int y0, int x1, int y1) : x0_(x0), y0_(y0), w_(x1 - x0 + 1), h_(y1 - y0 + 1) {
+    value_.assign(std::size_t(w_ + 1) * std::size_t(h_ + 1), glm::dvec3(0.0));
+    inside_.assign(value_.size(), 0.0);
+    for (int y = 0; y < h_; ++y)
+      for (int x = 0; x < w_; ++x) {
+        const int ix = x0 + x, iy = y0 + y;
+        const bool in_image = ix >= 0 && iy >= 0 && ix < int(image.width) && iy < int(image.height);
+        const std::size_t p = std::size_t(iy) * image.width + std::size_t(ix);
+        const double counts = in_image && (image.mask.empty() || image.mask[p]) ? 1.0 : 0.0;
+        const glm::dvec3 v = counts > 0 ? glm::dvec3(image.rgb[p]) : glm::dvec3(0.0);
+        value_[at(x + 1, y + 1)] = v + value_[at(x, y + 1)] + value_[at(x + 1, y)] - value_[at(x, y)];
+        inside_[at(x + 1, y + 1)] = counts + inside_[at(x, y + 1)] + inside_[at(x + 1, y)] - inside_[at(x, y)];
+      }
+  }
+  // Sum and count of the counted pixels in [x - r, x + r] x [y - r, y + r] (image coordinates).
+  std::pair<glm::dvec3, double> box(int x, int y, int r) const {
+    const int ax = std::clamp(x - r - x0_, 0, w_), bx = std::clamp(x + r + 1 - x0_, 0, w_);
+    const int ay = std::clamp(y - r - y0_, 0, h_), by = std::clamp(y + r + 1 - y0_, 0, h_);
+    const auto sum = [&](const auto& t) { return t[at(bx, by)] - t[at(ax, by)] - t[at(bx, ay)] + t[at(ax, ay)]; };
+    return {sum(value_), sum(inside_)};
+  }
+
+ private:
+  std::size_t at(int x, int y) const { return std::size_t(y) * std::size_t(w_ + 1) + std::size_t(x); }
+  int x0_, y0_, w_, h_;
+  std::vector<glm::dvec3> value_;
+  std::vector<double> inside_;
+};
+
+glm::dvec3 camera_position(const io::Camera& c) { return glm::dvec3(c.camera_to_world[3]); }
+
+glm::dvec3 ray_direction(const io::Camera& c, glm::dvec2 pixel) {
+  const glm::dvec3 in_camera((pixel.x - c.cx) / c.fx, -(pixel.y - c.cy) / c.fy, -1.0);  // OpenGL axes
+  return glm::normalize(glm::dmat3(c.camera_to_world) * in_camera);
+}
+
+FaceImage face_image_of(const io::Camera& camera) {
+  const io::Image photo = io::read_image(camera.image);
+  FaceImage g;
+  g.width = photo.width, g.height = photo.height;
+  g.rgb.resize(std::size_t(photo.width) * photo.height);
+  for (std::size_t p = 0; p < g.rgb.size(); ++p) {
+    const float* px = &photo.pixels[p * photo.channels];
+    g.rgb[p] = photo.channels >= 3 ? glm::vec3(px[0], px[1], px[2]) : glm::vec3(px[0]);
+  }
+  if (!camera.mask.empty()) g.mask = io::mask_of(io::read_image(camera.mask));
+  else if (photo.channels == 4) g.mask = io::mask_of(photo);
+  if (g.mask.size() != g.rgb.size()) g.mask.clear();
+  return g;
+}
+
+}  // namespace
+
+std::optional<BlobHit> find_eye_blob(const FaceImage& image, glm::dvec2 centre, double search_radius, double radius,
+                                      double min_contrast) {
+  const int r = std::max(1, int(std::lround(radius))), ring = 2 * r;
+  const int reach = int(std::ceil(search_radius));
+  // Pixel (i, j) has its centre at (i + 0.5, j + 0.5).
+  const int cx = int(std::floor(centre.x)), cy = int(std::floor(centre.y));
+  const BoxSums sums(image, cx - reach - ring - 1, cy - reach - ring - 1, cx + reach + ring + 1, cy + reach + ring + 1);
+  const int span = 2 * reach + 1;
+  std::vector<double> contrast(std::size_t(span) * std::size_t(span), -1e30);
+  const double full_ring = double((2 * ring + 1) * (2 * ring + 1));
+  int best = -1;
+  for (int dy = -reach; dy <= reach; ++dy)
+    for (int dx = -reach; dx <= reach; ++dx) {
+      if (dx * dx + dy * dy > reach * reach) continue;
+      const int x = cx + dx, y = cy + dy;
+      const auto [in_sum, in_count] = sums.box(x, y, r);
+      const auto [out_sum, out_count] = sums.box(x, y, ring);
+      if (out_count < 0.9 * full_ring || out_count - in_count <= 0) continue;  // off the animal or the photo
+      const double c = glm::length((out_sum - in_sum) / (out_count - in_count) - in_sum / in_count);
+      const int k = (dy + reach) * span + (dx + reach);
+      contrast[std::size_t(k)] = c;
+      if (best < 0 || c > contrast[std::size_t(best)]) best = k;
+    }
+  if (best < 0 || contrast[std::size_t(best)] < min_contrast) return std::nullopt;
+  const int bx = cx + best % span - reach, by = cy + best / span - reach;
+  // Sub-pixel: the centroid of how far each pixel near the peak differs from the ring's mean colour
+  // (squared, so the blob outweighs the noise around it).
+  const auto [ring_sum, ring_count] = sums.box(bx, by, ring);
+  const auto [core_sum, core_count] = sums.box(bx, by, r);
+  const glm::dvec3 ring_mean = (ring_sum - core_sum) / (ring_count - core_count);
+  const double reach_px = 1.5 * radius + 0.5;
+  glm::dvec2 weighted(0.0);
+  double total = 0;
+  for (int y = by - r - 1; y <= by + r + 1; ++y)
+    for (int x = bx - r - 1; x <= bx + r + 1; ++x) {
+      if (x < 0 || y < 0 || x >= int(image.width) || y >= int(image.height)) continue;
+      const std::size_t p = std::size_t(y) * image.width + std::size_t(x);
+      if (!image.mask.empty() && !image.mask[p]) continue;
+      const glm::dvec2 at(x + 0.5, y + 0.5);
+      if (glm::distance(at, glm::dvec2(bx + 0.5, by + 0.5)) > reach_px) continue;
+      const glm::dvec3 d = glm::dvec3(image.rgb[p]) - ring_mean;
+      const double w = glm::dot(d, d);
+      weighted += w * at, total += w;
+    }
+  const glm::dvec2 pixel = total > 0 ? weighted / total : glm::dvec2(bx + 0.5, by + 0.5);
+  return BlobHit{pixel, contrast[std::size_t(best)]};
+}
+
+namespace {
+
+// The point closest to the observations' rays (least squares); none when the rays are parallel.
+std::optional<glm::dvec3> closest_point(const std::vector<io::Camera>& cameras, const std::vector<EyeObservation>& observations) {
+  glm::dmat3 a(0.0);
+  glm::dvec3 b(0.0);
+  for (const EyeObservation& o : observations) {
+    const io::Camera& c = cameras[o.view];
+    const glm::dvec3 d = ray_direction(c, o.pixel);
+    const glm::dmat3 p = glm::dmat3(1.0) - glm::outerProduct(d, d);
+    a += p, b += p * camera_position(c);
+  }
+  if (std::fabs(glm::determinant(a)) < 1e-12) return std::nullopt;
+  return glm::inverse(a) * b;
+}
+
+double reprojection_error(const io::Camera& camera, const EyeObservation& o, const glm::dvec3& x) {
+  const glm::dvec3 p = camera.project(x);
+  return p.z > 0 ? glm::distance(glm::dvec2(p), o.pixel) : 1e30;
+}
+
+double widest_angle_deg(const std::vector<io::Camera>& cameras, const std::vector<EyeObservation>& observations, const glm::dvec3& x) {
+  double widest = 0;
+  for (std::size_t i = 0; i < observations.size(); ++i)
+    for (std::size_t j = i + 1; j < observations.size(); ++j) {
+      const glm::dvec3 u = glm::normalize(camera_position(cameras[observations[i].view]) - x);
+      const glm::dvec3 v = glm::normalize(camera_position(cameras[observations[j].view]) - x);
+      widest = std::max(widest, std::acos(std::clamp(glm::dot(u, v), -1.0, 1.0)) * 180.0 / M_PI);
+    }
+  return widest;
+}
+
+}  // namespace
+
+TriangulatedPoint triangulate(const std::vector<io::Camera>& cameras, const std::vector<EyeObservation>& observations,
+                              double max_error_px, double min_angle_deg) {
+  TriangulatedPoint out;
+  if (observations.size() < 2) {
+    out.reason = "seen in " + std::to_string(observations.size()) + " view(s)";
+    return out;
+  }
+  // Every pair of views that sees it from far enough apart proposes a point; the one most views
+  // agree with (within max_error_px; the smaller error sum breaks ties) wins, then all of them refine it.
+  std::vector<EyeObservation> best;
+  double best_error = 0;
+  for (std::size_t i = 0; i < observations.size(); ++i)
+    for (std::size_t j = i + 1; j < observations.size(); ++j) {
+      const std::vector<EyeObservation> pair{observations[i], observations[j]};
+      const std::optional<glm::dvec3> x = closest_point(cameras, pair);
+      if (!x || widest_angle_deg(cameras, pair, *x) < min_angle_deg) continue;
+      std::vector<EyeObservation> agree;
+      double error = 0;
+      for (const EyeObservation& o : observations)
+        if (const double e = reprojection_error(cameras[o.view], o, *x); e <= max_error_px) agree.push_back(o), error += e;
+      if (agree.size() > best.size() || (agree.size() == best.size() && error < best_error)) best = agree, best_error = error;
+    }
+  if (best.size() < 2) {
+    out.reason = "no two views agree within " + std::to_string(max_error_px) + " px from " + std::to_string(min_angle_deg) +
+                 " degrees apart or more (" + std::to_string(observations.size()) + " views saw a candidate)";
+    return out;
+  }
+  std::optional<glm::dvec3> x = closest_point(cameras, best);
+  // The refit may push a view past the bound; it then leaves, and the rest refit.
+  while (x && best.size() > 2) {
+    std::size_t worst = 0;
+    double worst_error = -1;
+    for (std::size_t k = 0; k < best.size(); ++k)
+      if (const double e = reprojection_error(cameras[best[k].view], best[k], *x); e > worst_error) worst_error = e, worst = k;
+    if (worst_error <= max_error_px) break;
+    best.erase(best.begin() + std::ptrdiff_t(worst));
+    x = closest_point(cameras, best);
+  }
+  if (!x) {
+    out.reason = "the views' rays are parallel";
+    return out;
+  }
+  double sum2 = 0;
+  for (const EyeObservation& o : best) sum2 += std::pow(reprojection_error(cameras[o.view], o, *x), 2);
+  out.position = x;
+  out.reprojection_rms_px = std::sqrt(sum2 / double(best.size()));
+  for (const EyeObservation& o : best) out.views.push_back(o.view);
+  return out;
+}
+
+std::optional<double> PhotoEyes::distance() const {
+  if (!left.position || !right.position) return std::nullopt;
+  return glm::distance(*left.position, *right.position);
+}
+
+PhotoEyes find_eyes_in_photos(const io::Scene& scene, const EyeSearch& search) {
+  PhotoEyes out;
+  const double eye_distance = glm::distance(search.left, search.right);
+  std::vector<EyeObservation> seen[2];
+  std::vector<double> radii_px;
+  const glm::dvec3 fitted[2] = {search.left, search.right};
+  for (std::uint32_t v = 0; v < scene.cameras.size(); ++v) {
+    const io::Camera& cam = scene.cameras[v];
+    if (cam.image.empty()) continue;
+    // Which eyes this view sees, and how large.
+    bool any = false;
+    double radius_px[2] = {0, 0};
+    for (int e = 0; e < 2; ++e) {
+      const glm::dvec3 outward = glm::normalize(fitted[e] - search.head_centre);
+      const glm::dvec3 to_camera = glm::normalize(camera_position(cam) - fitted[e]);
+      const glm::dvec3 p = cam.project(fitted[e]);
+      if (glm::dot(outward, to_camera) < std::cos(70.0 * M_PI / 180.0) || p.z <= 0) continue;
+      radius_px[e] = cam.fx * search.eye_radius / p.z;
+      if (radius_px[e] < 0.75) radius_px[e] = 0;  // not resolved: under 1.5 pixels across
+      any = any || radius_px[e] > 0;
+    }
+    if (!any) continue;
+    ++out.views_facing;
+    const FaceImage face = face_image_of(cam);
+    for (int e = 0; e < 2; ++e) {
+      if (radius_px[e] <= 0) continue;
+      const glm::dvec3 p = cam.project(fitted[e]);
+      // The fit's eyes may be a fifth of the eye distance off each: search that far, and more.
+      const double search_px = std::max(2.0 * radius_px[e], cam.fx * 0.3 * eye_distance / p.z);
+      if (const auto hit = find_eye_blob(face, glm::dvec2(p), search_px, radius_px[e], 0.05)) {
+        seen[e].push_back({v, hit->pixel});
+        radii_px.push_back(radius_px[e]);
+      }
+    }
+  }
+  std::sort(radii_px.begin(), radii_px.end());
+  const double typical_radius = radii_px.empty() ? 1.0 : radii_px[radii_px.size() / 2];
+  const double max_error = std::max(1.5, 0.75 * typical_radius);
+  out.left = triangulate(scene.cameras, seen[0], max_error);
+  out.right = triangulate(scene.cameras, seen[1], max_error);
+  // An eye placed far from where the fit puts it is another dark spot (a nostril, an ear's shadow).
+  for (int e = 0; e < 2; ++e) {
+    TriangulatedPoint& t = e == 0 ? out.left : out.right;
+    if (t.position && glm::distance(*t.position, fitted[e]) > 0.5 * eye_distance) {
+      t.reason = "found " + std::to_string(glm::distance(*t.position, fitted[e]) / eye_distance) +
+                 " eye distances from the fitted eye: another dark spot";
+      t.position.reset();
+    }
+  }
+  return out;
+}
+
+json to_json(const TriangulatedPoint& p, const std::vector<io::Camera>& cameras) {
+  json views = json::array();
+  for (std::uint32_t v : p.views) views.push_back(cameras[v].name);
+  json j{{"views", views}, {"reprojection_rms_px", p.reprojection_rms_px}};
+  j["position"] = p.position ? json_vec3(*p.position) : json();
+  if (!p.reason.empty()) j["reason"] = p.reason;
+  return j;
+}
+
+}  // namespace nf::body
