@@ -55,6 +55,13 @@ Knowledge knowledge_from_json(const json& j, const std::string& source) {
   k.eye_distance_cm = finite_number(j["eye_distance_cm"], source + ": eye_distance_cm", 0.01f, 1000.0f);
   // Optional: files written before it existed read with the default.
   if (j.contains("hair_diameter_mm")) k.hair_diameter_mm = finite_number(j["hair_diameter_mm"], source + ": hair_diameter_mm", kMinHairMm, kMaxHairMm);
+  if (j.contains("origin")) {
+    if (!j["origin"].is_object()) throw InputError(source + ": 'origin' must be an object of field -> where it came from");
+    for (const auto& [field, from] : j["origin"].items()) {
+      if (!from.is_string()) throw InputError(source + ": origin." + field + " must be a string");
+      k.origin[field] = from.get<std::string>();
+    }
+  }
   if (j.contains("body_length_cm") && !j["body_length_cm"].is_null())
     k.body_length_cm = finite_number(j["body_length_cm"], source + ": body_length_cm", kMinBodyLengthCm, kMaxBodyLengthCm);
   if (!j.contains("regions") || !j["regions"].is_object()) throw InputError(source + ": missing object 'regions'");
@@ -101,6 +108,7 @@ json knowledge_to_json(const Knowledge& k) {
           {"eye_distance_cm", k.eye_distance_cm},
           {"hair_diameter_mm", k.hair_diameter_mm},
           {"body_length_cm", k.body_length_cm ? json(*k.body_length_cm) : json()},
+          {"origin", k.origin},
           {"regions", regions}};
 }
 

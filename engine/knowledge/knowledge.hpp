@@ -6,6 +6,7 @@
 // as built-in presets for the animals the paper annotates (assets/knowledge/, embedded at build).
 #include <array>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -39,6 +40,9 @@ struct Knowledge {
   // A typical adult's head-and-body length (nose tip to the tail's root), when known: a second
   // metric-scale cue beside the eyes (knowledge/metric_scale.hpp).
   std::optional<float> body_length_cm;
+  // Where values came from when not from the source itself: "regions.ears.direction" -> "filled from
+  // body", "eye_distance_cm" -> "preset:lion" (a VLM's unusable answer), ...
+  std::map<std::string, std::string> origin;
   std::array<std::optional<RegionKnowledge>, body::kRegionCount> regions;
 
   // The region's entry; throws InputError naming the region when the file lacks it.

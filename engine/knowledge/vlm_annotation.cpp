@@ -131,9 +131,112 @@ bool read_verification(const std::string& text, PartialKnowledge& k, std::vector
   return true;
 }
 
+
+bool is_table_step(const std::string& step) { return step == "length" || step == "thickness" || step == "direction"; }
+
+// One answer to the length, thickness or direction prompt into `k`. Throws InputError naming the
+// region and field of the first value it refuses.
+void read_table_step(const std::string& step, const std::vector<FoundObject>& objects, PartialKnowledge& k,
+                     std::vector<std::string>& warnings, const std::string& at) {
+  if (step == "length" || step == "thickness") {
+    const RegionValues<double> v = table_in(objects, step == "length" ? 'L' : 'T', at);
+    if (step == "length" && std::none_of(v.values.begin(), v.values.end(), [](const auto& e) { return e.first == Region::body; }))
+      throw InputError(at + ": no length for 'body', the region every other one falls back on");
+    note_unknown(v.unknown, step, warnings);
+    for (const auto& [r, cm] : v.values) (step == "length" ? k.length : k.thickness)[std::size_t(r)] = cm;
+    return;
+  }
+  if (objects.empty()) throw InputError(at + ": the answer holds no dict of parts");
+  std::optional<RegionValues<glm::vec3>> v;
+  for (const FoundObject& o : objects) {
+    try {
+      v = region_directions(o.value, at);
+      break;
+    } catch (const InputError& e) {
+      if (std::string(e.what()).find("names no body region") == std::string::npos) throw;
+    }
+  }
+  if (!v) throw InputError(at + ": the answer names no body region");
+  note_unknown(v->unknown, "direction", warnings);
+  for (const auto& [r, d] : v->values) k.direction[std::size_t(r)] = d;
+}
+
+// The region an error message names ("...: regions.body.length_cm = 75"), if any.
+std::optional<Region> region_named_in(const std::string& message) {
+  const std::size_t at = message.find("regions.");
+  if (at == std::string::npos) return std::nullopt;
+  const std::size_t begin = at + 8, end = message.find_first_of(".: ", begin);
+  return body::region_from_name(message.substr(begin, end == std::string::npos ? std::string::npos : end - begin));
+}
+
+// Every key that names `r`, at any depth.
+void erase_region(json& j, Region r) {
+  if (!j.is_object()) return;
+  for (auto it = j.begin(); it != j.end();) {
+    if (match_region(it.key()) == r) {
+      it = j.erase(it);
+    } else {
+      erase_region(*it, r);
+      ++it;
+    }
+  }
+}
+
+const char* field_of(const std::string& step) {
+  return step == "length" ? "length_cm" : step == "thickness" ? "thickness_cm" : "direction";
+}
+
+// After the retry: the regions whose values still do not read take the fallback's (the animal's
+// preset), the rest of the answer stands; an answer with nothing readable gives way to the
+// fallback for the whole field. Each replaced value is a warning and an entry of `origin`.
+void fall_back_on_table(const std::string& step, const std::string& answer, const std::string& problem, const Knowledge& fallback,
+                        PartialKnowledge& k, Annotation& out, const std::string& at) {
+  std::vector<FoundObject> objects = find_objects(answer);
+  std::vector<Region> refused;
+  std::optional<std::string> whole;  // why nothing of the answer reads
+  for (std::string message = problem;;) {
+    const std::optional<Region> r = region_named_in(message);
+    if (!r || std::find(refused.begin(), refused.end(), *r) != refused.end()) {
+      whole = message;
+      break;
+    }
+    refused.push_back(*r);
+    for (FoundObject& o : objects) erase_region(o.value, *r);
+    try {
+      PartialKnowledge attempt = k;
+      read_table_step(step, objects, attempt, out.warnings, at);
+      k = attempt;
+      break;
+    } catch (const InputError& e) {
+      message = e.what();
+    }
+  }
+  const std::string field = field_of(step);
+  const auto take = [&](Region r) {
+    if (!fallback.has(r)) return false;
+    const RegionKnowledge& f = fallback.at(r);
+    if (step == "length") k.length[std::size_t(r)] = f.length_cm;
+    else if (step == "thickness") k.thickness[std::size_t(r)] = f.thickness_cm;
+    else k.direction[std::size_t(r)] = f.direction;
+    out.origin["regions." + name_of(r) + "." + field] = fallback.source;
+    return true;
+  };
+  if (whole) {
+    for (int i = 0; i < body::kRegionCount; ++i) take(Region(i));
+    out.warnings.push_back("the " + step + " answers stayed unusable (" + *whole + "): the " + fallback.source + " values stand for " +
+                           field + " in every region");
+    return;
+  }
+  for (Region r : refused) {
+    const bool taken = take(r);
+    out.warnings.push_back("regions." + name_of(r) + "." + field + ": the answers stayed unusable; " +
+                           (taken ? "the " + fallback.source + " value stands" : "the fill rules decide"));
+  }
+}
 }  // namespace
 
-Annotation annotate_with_vlm(const ChatFunction& chat, const AnnotationImages& images, const std::string& where) {
+Annotation annotate_with_vlm(const ChatFunction& chat, const AnnotationImages& images, const std::string& where,
+                             const Knowledge* fallback) {
   Annotation out;
   PartialKnowledge k;
   std::optional<double> eye_cm, body_cm;
@@ -156,16 +259,8 @@ Annotation annotate_with_vlm(const ChatFunction& chat, const AnnotationImages& i
       messages.push_back({{"role", "assistant"}, {"content", answer}});
       try {
         if (answer.find_first_not_of(" \t\r\n") == std::string::npos) throw InputError(at + ": the answer is empty");
-        if (prompt.step == "length") {
-          const RegionValues<double> v = table_in(find_objects(answer), 'L', at);
-          if (std::none_of(v.values.begin(), v.values.end(), [](const auto& e) { return e.first == Region::body; }))
-            throw InputError(at + ": no length for 'body', the region every other one falls back on");
-          note_unknown(v.unknown, "length", out.warnings);
-          for (const auto& [r, cm] : v.values) k.length[std::size_t(r)] = cm;
-        } else if (prompt.step == "thickness") {
-          const RegionValues<double> v = table_in(find_objects(answer), 'T', at);
-          note_unknown(v.unknown, "thickness", out.warnings);
-          for (const auto& [r, cm] : v.values) k.thickness[std::size_t(r)] = cm;
+        if (is_table_step(prompt.step)) {
+          read_table_step(prompt.step, find_objects(answer), k, out.warnings, at);
         } else if (prompt.step == "verify") {
           // This step only corrects: an answer without any dict ("yes, they are right") after the
           // retry keeps the earlier values.
@@ -173,21 +268,6 @@ Annotation annotate_with_vlm(const ChatFunction& chat, const AnnotationImages& i
             if (attempt == 0) throw InputError(at + ": the answer holds no dict of parts");
             out.warnings.push_back("the verify answer gave no values; the earlier ones stand");
           }
-        } else if (prompt.step == "direction") {
-          const std::vector<FoundObject> objects = find_objects(answer);
-          if (objects.empty()) throw InputError(at + ": the answer holds no dict of parts");
-          std::optional<RegionValues<glm::vec3>> v;
-          for (const FoundObject& o : objects) {
-            try {
-              v = region_directions(o.value, at);
-              break;
-            } catch (const InputError& e) {
-              if (std::string(e.what()).find("names no body region") == std::string::npos) throw;
-            }
-          }
-          if (!v) throw InputError(at + ": the answer names no body region");
-          note_unknown(v->unknown, "direction", out.warnings);
-          for (const auto& [r, d] : v->values) k.direction[std::size_t(r)] = d;
         } else if (prompt.step == "hair") {
           const double mm = hair_diameter_mm_of(answer, at);
           if (!(mm >= kMinHairMm && mm <= kMaxHairMm))
@@ -215,6 +295,17 @@ Annotation annotate_with_vlm(const ChatFunction& chat, const AnnotationImages& i
                                  "): the metric scale rests on the eyes");
           break;
         }
+        if (attempt > 0 && fallback && is_table_step(prompt.step)) {
+          fall_back_on_table(prompt.step, answer, e.what(), *fallback, k, out, at);
+          break;
+        }
+        if (attempt > 0 && fallback && prompt.step == "eyes") {
+          eye_cm = fallback->eye_distance_cm;
+          out.warnings.push_back("the eyes answer stayed unusable (" + std::string(e.what()) + "): the " + fallback->source +
+                                 " eye distance, " + num(fallback->eye_distance_cm) + " cm, stands");
+          out.origin["eye_distance_cm"] = fallback->source;
+          break;
+        }
         if (attempt > 0) throw;
         const std::string message = e.what();
         const std::string problem = message.rfind(at + ": ", 0) == 0 ? message.substr(at.size() + 2) : message;
@@ -224,6 +315,7 @@ Annotation annotate_with_vlm(const ChatFunction& chat, const AnnotationImages& i
     }
   }
   out.knowledge = fill_missing_regions(k, out.warnings, where);
+  for (const auto& [field, source] : out.origin) out.knowledge.origin[field] = source;
   out.knowledge.eye_distance_cm = float(*eye_cm);
   out.knowledge.hair_diameter_mm = float(hair_mm);
   if (body_cm) out.knowledge.body_length_cm = float(*body_cm);
@@ -275,10 +367,12 @@ Knowledge fill_missing_regions(const PartialKnowledge& a, std::vector<std::strin
     } else if (bald_when_missing(r)) {
       e.length_cm = 0;
       bald.push_back(name);
+      k.origin["regions." + name + ".length_cm"] = "bald: no answer";
     } else {
       length_from = *donor(r, a.length);
       e.length_cm = float(*a.length[idx(*length_from)]);
       filled.push_back(name + " <- " + name_of(*length_from));
+      k.origin["regions." + name + ".length_cm"] = "filled from " + name_of(*length_from);
     }
     if (a.thickness[idx(r)]) {
       e.thickness_cm = float(*a.thickness[idx(r)]);
@@ -289,6 +383,7 @@ Knowledge fill_missing_regions(const PartialKnowledge& a, std::vector<std::strin
     } else {
       e.thickness_cm = 0.35f * e.length_cm;
       no_thickness.push_back(name);
+      k.origin["regions." + name + ".thickness_cm"] = "0.35 x length";
     }
     if (e.thickness_cm > e.length_cm) {
       warnings.push_back("regions." + name + ".thickness_cm " + num(e.thickness_cm) + " exceeds its length " +
@@ -300,9 +395,11 @@ Knowledge fill_missing_regions(const PartialKnowledge& a, std::vector<std::strin
     } else if (const auto from = donor(r, a.direction)) {
       e.direction = *a.direction[idx(*from)];
       if (e.length_cm > 0) no_direction.push_back(name + " <- " + name_of(*from));
+      if (e.length_cm > 0) k.origin["regions." + name + ".direction"] = "filled from " + name_of(*from);
     } else {
       e.direction = {0, -1, 0};  // fur falls with gravity when nothing says otherwise
       if (e.length_cm > 0) no_direction.push_back(name + " <- down");
+      if (e.length_cm > 0) k.origin["regions." + name + ".direction"] = "down: no answer";
     }
     k.regions[idx(r)] = e;
   }

@@ -6,6 +6,7 @@
 // by the rules of fill_missing_regions. Transport, caching and transcripts are the caller's (the
 // `chat` function), so this is tested without a network.
 #include <functional>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -26,14 +27,18 @@ using ChatFunction = std::function<std::string(const json& messages, const std::
 struct Annotation {
   Knowledge knowledge;
   std::vector<std::string> warnings;  // filled regions, clamped thickness, ignored names
+  std::map<std::string, std::string> origin;  // values that came from the fallback: field -> its source
   int requests = 0;
 };
 
 inline constexpr double kMaxLengthCm = 60, kMinEyeCm = 0.5, kMaxEyeCm = 40;
 
-// Throws InputError "<where>: the answer to the <step> prompt: ..." naming the region and field
-// when an answer stays unusable after one retry.
-Annotation annotate_with_vlm(const ChatFunction& chat, const AnnotationImages& images, const std::string& where);
+// An answer that stays unusable after one retry: with a `fallback` (the animal's preset), the
+// values it refuses (a region's, or the whole field's when nothing reads) are the fallback's, each
+// with a warning and an entry in the knowledge's `origin`; without one, InputError "<where>: the
+// answer to the <step> prompt: ..." naming the region and field.
+Annotation annotate_with_vlm(const ChatFunction& chat, const AnnotationImages& images, const std::string& where,
+                             const Knowledge* fallback = nullptr);
 
 // The regions an annotation lacks, filled from a related region (README, *Knowledge*): the inner
 // ear canal from the ears (as the prompt says), paws and front paws from each other, each leg from

@@ -161,16 +161,21 @@ json annotate_with_vlm(const StageContext& c, const KnowledgeSettings& s, const 
   session.name_image(images.frontal, "images/frontal.jpg");
   session.name_image(images.side_with_axes, "images/side_axes.jpg");
   std::vector<knowledge::Knowledge> samples;
+  // An answer that stays unusable falls back on the animal's preset when `animal` names one.
+  const std::vector<std::string> presets = knowledge::preset_names();
+  std::optional<knowledge::Knowledge> fallback;
+  if (std::find(presets.begin(), presets.end(), s.animal) != presets.end()) fallback = knowledge::preset(s.animal);
   const knowledge::ChatFunction chat = [&](const json& messages, const std::string& step) { return session.chat(messages, step); };
   for (int k = 0; k < s.samples; ++k) {
     session.set_sample(k);
     const std::string where = "knowledge (VLM " + s.model + (s.samples > 1 ? ", sample " + std::to_string(k + 1) : "") + ")";
     knowledge::Annotation a;
     try {
-      a = knowledge::annotate_with_vlm(chat, images, where);
+      a = knowledge::annotate_with_vlm(chat, images, where, fallback ? &*fallback : nullptr);
     } catch (const InputError& e) {
       session.forget_sample();
-      throw InputError(std::string(e.what()) + " (the conversation: " + transcript.string() + ")");
+      throw InputError(std::string(e.what()) + " (the conversation: " + transcript.string() + ")" +
+                       (fallback ? std::string() : "; --set knowledge.animal=PRESET (" + join(presets) + ") lets a preset's values stand in"));
     }
     session.keep_sample();
     for (const std::string& w : a.warnings) warnings.push_back((s.samples > 1 ? "sample " + std::to_string(k + 1) + ": " : "") + w);
@@ -365,7 +370,9 @@ const SettingsSchema<KnowledgeSettings>& knowledge_settings() {
         .text("vlm", [](K& k) -> auto& { return k.vlm; }, {},
               "an OpenAI-compatible endpoint, e.g. https://api.openai.com/v1 or http://localhost:11434 (Ollama)")
         .text("model", [](K& k) -> auto& { return k.model; }, {}, "the VLM's model name, e.g. gpt-4o or qwen2.5vl")
-        .text("animal", [](K& k) -> auto& { return k.animal; }, {}, "the animal's name written into a VLM annotation")
+        .text("animal", [](K& k) -> auto& { return k.animal; }, {},
+              "the animal's name written into a VLM annotation; a preset's name (cat, dog, ...) also makes its values stand in for "
+              "answers that stay unusable")
         .add("samples", [](K& k) -> auto& { return k.samples; }, 1, 25, "VLM: independent annotations; more than 1 takes their consensus")
         .add("image_size", [](K& k) -> auto& { return k.image_size; }, 64, 4096, "VLM: longer side of the photos sent, pixels")
         .add("timeout_s", [](K& k) -> auto& { return k.timeout_s; }, 1, 3600, "VLM: seconds one request may take")

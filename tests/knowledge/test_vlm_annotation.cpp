@@ -82,6 +82,40 @@ TEST_CASE("the head-and-body length: read in cm, m or prose, never a tail's; no 
   CHECK_FALSE(annotate_with_vlm(std::ref(huge), kImages, "test").knowledge.body_length_cm.has_value());
 }
 
+TEST_CASE("an answer that stays unusable: the animal's preset stands in for the values refused, and knowledge.json says so") {
+  const Knowledge cat = preset("cat");
+  // One region out of range twice: that region takes the preset's length, the rest of the answer stands.
+  ScriptedModel one;
+  one.answers["length"] = R"({"body": 1.1, "tail": 75, "ears": 0.3})";
+  one.answers["verify"] = R"({"thickness": {"body": 0.4}})";
+  const Annotation a = annotate_with_vlm(std::ref(one), kImages, "test", &cat);
+  CHECK(a.knowledge.at(Region::tail).length_cm == doctest::Approx(cat.at(Region::tail).length_cm));
+  CHECK(a.knowledge.at(Region::body).length_cm == doctest::Approx(1.1));
+  CHECK(a.knowledge.at(Region::ears).length_cm == doctest::Approx(0.3));
+  CHECK(a.knowledge.origin.at("regions.tail.length_cm") == "preset:cat");
+  CHECK(a.knowledge.origin.count("regions.body.length_cm") == 0);
+  CHECK(std::any_of(a.warnings.begin(), a.warnings.end(), [](const std::string& w) {
+    return w.find("regions.tail.length_cm: the answers stayed unusable; the preset:cat value stands") != std::string::npos;
+  }));
+  // Nothing readable: the whole field is the preset's.
+  ScriptedModel none;
+  none.answers["direction"] = "I cannot tell from these photos.";
+  const Annotation b = annotate_with_vlm(std::ref(none), kImages, "test", &cat);
+  CHECK(b.knowledge.at(Region::tail).direction == cat.at(Region::tail).direction);
+  CHECK(b.knowledge.origin.at("regions.ears.direction") == "preset:cat");
+  ScriptedModel blind;
+  blind.answers["eyes"] = "No idea.";
+  const Annotation c = annotate_with_vlm(std::ref(blind), kImages, "test", &cat);
+  CHECK(c.knowledge.eye_distance_cm == doctest::Approx(cat.eye_distance_cm));
+  CHECK(c.knowledge.origin.at("eye_distance_cm") == "preset:cat");
+  // Without a preset the stage still stops, naming the region and field.
+  CHECK_THROWS_WITH_AS(annotate_with_vlm(std::ref(one), kImages, "test"), doctest::Contains("regions.tail.length_cm = 75"), InputError);
+  // The fill rules are recorded too, and the record survives knowledge.json.
+  CHECK(a.knowledge.origin.at("regions.under_tail.length_cm") == "filled from tail");
+  const Knowledge back = knowledge_from_json(knowledge_to_json(a.knowledge), "k.json");
+  CHECK(back.origin == a.knowledge.origin);
+}
+
 TEST_CASE("the hair's diameter: read in mm, um or prose; no usable answer keeps the default with a warning") {
   CHECK(hair_diameter_mm_of(R"({"hair_diameter_mm": 0.07})", "hair") == doctest::Approx(0.07));
   CHECK(hair_diameter_mm_of(R"({"diameter": "70 um"})", "hair") == doctest::Approx(0.07));
