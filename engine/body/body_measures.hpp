@@ -1,5 +1,6 @@
 #pragma once
-// Sizes of a fitted body that the knowledge gives in centimetres, so their ratio is a metric scale.
+// Landmarks and sizes of a posed body: where its head points (the mane's border, the eyes' search),
+// and the lengths the knowledge gives in centimetres, so their ratio is a metric scale.
 #include <optional>
 #include <vector>
 
@@ -8,6 +9,15 @@
 #include "engine/body/body_model.hpp"
 
 namespace nf::body {
+
+struct HeadAxis {
+  glm::dvec3 centre;   // the head joint, world
+  glm::dvec3 forward;  // towards the muzzle (unit)
+};
+
+// The head joint and the direction to the muzzle joint of a model posed as `joints` (world); none
+// when the model names no "head" and "muzzle" joints (a user's SMAL file may not).
+std::optional<HeadAxis> head_axis(const BodyModel& model, const std::vector<glm::dvec3>& joints);
 
 // The head-and-body length (nose tip to the tail's root, as zoologists measure an animal) of a
 // model posed as `joints` (world): the polyline through its nose, muzzle, head, neck, chest,

@@ -1,21 +1,11 @@
 #include "engine/body/mane_labels.hpp"
 
-#include <algorithm>
-
 #include "engine/body/regions.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/parallel.hpp"
 #include "engine/geometry/point_index.hpp"
 
 namespace nf::body {
-
-std::optional<HeadAxis> head_axis(const BodyModel& model, const std::vector<glm::dvec3>& joints) {
-  const int head = model.joint_index("head"), muzzle = model.joint_index("muzzle");
-  if (head < 0 || muzzle < 0 || std::size_t(std::max(head, muzzle)) >= joints.size()) return std::nullopt;
-  const glm::dvec3 forward = joints[std::size_t(muzzle)] - joints[std::size_t(head)];
-  if (!(glm::length(forward) > 0)) return std::nullopt;
-  return HeadAxis{joints[std::size_t(head)], glm::normalize(forward)};
-}
 
 ManeLabelling label_mane(geometry::Mesh& surface, const geometry::Mesh& fitted, const std::optional<HeadAxis>& head) {
   if (surface.regions.size() != surface.vertex_count()) throw InputError("mane: the surface has no regions");

@@ -11,20 +11,11 @@
 
 #include <glm/glm.hpp>
 
-#include "engine/body/body_model.hpp"
+#include "engine/body/body_measures.hpp"
 #include "engine/core/json.hpp"
 #include "engine/geometry/mesh.hpp"
 
 namespace nf::body {
-
-struct HeadAxis {
-  glm::dvec3 centre;   // the head joint, world
-  glm::dvec3 forward;  // towards the muzzle (unit)
-};
-
-// The head joint and the direction to the muzzle joint of a model posed as `joints` (world); none
-// when the model names no "head" and "muzzle" joints (a user's SMAL file may not).
-std::optional<HeadAxis> head_axis(const BodyModel& model, const std::vector<glm::dvec3>& joints);
 
 struct ManeLabelling {
   std::uint64_t vertices = 0;  // surface vertices labelled mane

@@ -6,7 +6,6 @@
 
 #include "engine/body/posing.hpp"
 #include "engine/body/body_measures.hpp"
-#include "engine/body/mane_labels.hpp"
 #include "engine/body/photo_eyes.hpp"
 #include "engine/body/region_transfer.hpp"
 #include "engine/body/smal_model.hpp"
