@@ -16,7 +16,7 @@ struct HeadAxis {
 };
 
 // The head joint and the direction to the muzzle joint of a model posed as `joints` (world); none
-// when the model names no "head" and "muzzle" joints (a user's SMAL file may not).
+// when the model names no "head" and "muzzle" joints (SMAL's own file names its joints otherwise).
 std::optional<HeadAxis> head_axis(const BodyModel& model, const std::vector<glm::dvec3>& joints);
 
 // The head-and-body length (nose tip to the tail's root, as zoologists measure an animal) of a

@@ -3,14 +3,16 @@
 #include "engine/body/regions.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/parallel.hpp"
+#include "engine/geometry/mesh_tools.hpp"
 #include "engine/geometry/point_index.hpp"
 
 namespace nf::body {
 
-ManeLabelling label_mane(geometry::Mesh& surface, const geometry::Mesh& fitted, const std::optional<HeadAxis>& head) {
-  if (surface.regions.size() != surface.vertex_count()) throw InputError("mane: the surface has no regions");
+ManeLabelling label_mane(geometry::Mesh& surface, const geometry::Mesh& fitted, const std::optional<HeadAxis>& head,
+                         const std::string& source) {
+  if (surface.regions.size() != surface.vertex_count()) throw InputError("mane: the surface labelled from " + source + " has no regions");
   if (fitted.regions.size() != fitted.vertex_count() || fitted.vertex_count() == 0)
-    throw InputError("mane: the fitted body has no regions");
+    throw InputError(source + ": the fitted body has no regions, so no mane can be placed on it");
   const std::int32_t neck = region_id(Region::neck), face = region_id(Region::face), mane = region_id(Region::mane);
   std::vector<std::uint8_t> zone(fitted.vertex_count(), 0);
   for (std::size_t v = 0; v < zone.size(); ++v) {
@@ -27,15 +29,12 @@ ManeLabelling label_mane(geometry::Mesh& surface, const geometry::Mesh& fitted, 
   });
   ManeLabelling out;
   out.head_known = head.has_value();
+  const std::vector<double> area = geometry::vertex_areas(surface);
   double total = 0, labelled = 0;
-  for (std::size_t f = 0; f < surface.triangle_count(); ++f) {
-    const std::uint32_t* t = &surface.triangles[3 * f];
-    const glm::dvec3 a(surface.position(t[0])), b(surface.position(t[1])), c(surface.position(t[2]));
-    const double third = glm::length(glm::cross(b - a, c - a)) / 6.0;
-    total += 3 * third;
-    for (int k = 0; k < 3; ++k) labelled += surface.regions[t[k]] == mane ? third : 0.0;
+  for (std::size_t v = 0; v < area.size(); ++v) {
+    total += area[v];
+    if (surface.regions[v] == mane) labelled += area[v], ++out.vertices;
   }
-  for (std::int32_t r : surface.regions) out.vertices += r == mane;
   out.area_share = total > 0 ? labelled / total : 0;
   return out;
 }

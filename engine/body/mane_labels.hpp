@@ -2,11 +2,11 @@
 // A mane: the region the knowledge adds (preset, file or VLM) but the body template does not
 // carry, labelled on a fitted surface where anatomy puts it: the neck and the head behind its
 // centre, as the procedural family labels a maned animal. Whether the animal has one is the
-// knowledge's call. The surface's own stand-off from the fit does not say where a mane is: the fit
-// follows the fur layer (its shape space widens the neck, its offsets do the rest), so on a lion of
-// `nf_gpu synth` the mane stands no further off the fit than the shoulders (docs/method.md, the defur stage).
+// knowledge's call. Not from the surface's stand-off off the fit: the fit follows the fur layer, so
+// a mane stands no further off it than the shoulders (docs/method.md, the defur stage).
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -25,8 +25,10 @@ struct ManeLabelling {
 
 // Labels `surface` (its regions from `fitted`, e.g. M_NeuS or M_bald) with Region::mane where its
 // nearest vertex of `fitted` is on the neck, or on the face behind the head's centre. Only neck
-// and face vertices of the surface change.
-ManeLabelling label_mane(geometry::Mesh& surface, const geometry::Mesh& fitted, const std::optional<HeadAxis>& head);
+// and face vertices of the surface change. InputError naming `source` (the fitted body's file) when
+// a mesh lacks its regions.
+ManeLabelling label_mane(geometry::Mesh& surface, const geometry::Mesh& fitted, const std::optional<HeadAxis>& head,
+                         const std::string& source);
 
 json to_json(const ManeLabelling& labelling);
 

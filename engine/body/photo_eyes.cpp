@@ -58,7 +58,7 @@ FaceImage face_image_of(const io::Camera& camera) {
     g.rgb[p] = photo.channels >= 3 ? glm::vec3(px[0], px[1], px[2]) : glm::vec3(px[0]);
   }
   if (!camera.mask.empty()) g.mask = io::mask_of(io::read_image(camera.mask));
-  else if (photo.channels == 4) g.mask = io::mask_of(photo);
+  else if (photo.channels == 2 || photo.channels == 4) g.mask = io::mask_of(photo);
   if (g.mask.size() != g.rgb.size()) g.mask.clear();
   return g;
 }
@@ -90,8 +90,8 @@ std::optional<BlobHit> find_eye_blob(const FaceImage& image, glm::dvec2 centre, 
     }
   if (best < 0 || contrast[std::size_t(best)] < min_contrast) return std::nullopt;
   const int bx = cx + best % span - reach, by = cy + best / span - reach;
-  // Sub-pixel: the centroid of how far each pixel near the peak differs from the ring's mean colour
-  // (squared, so the blob outweighs the noise around it).
+  // Sub-pixel: the centroid of how far each pixel near the peak differs from the ring's mean colour,
+  // beyond half the blob's contrast (fur texture and shading below that weigh nothing).
   const auto [ring_sum, ring_count] = sums.box(bx, by, ring);
   const auto [core_sum, core_count] = sums.box(bx, by, r);
   const glm::dvec3 ring_mean = (ring_sum - core_sum) / (ring_count - core_count);
@@ -105,8 +105,7 @@ std::optional<BlobHit> find_eye_blob(const FaceImage& image, glm::dvec2 centre, 
       if (!image.mask.empty() && !image.mask[p]) continue;
       const glm::dvec2 at(x + 0.5, y + 0.5);
       if (glm::distance(at, glm::dvec2(bx + 0.5, by + 0.5)) > reach_px) continue;
-      const glm::dvec3 d = glm::dvec3(image.rgb[p]) - ring_mean;
-      const double w = glm::dot(d, d);
+      const double w = std::max(0.0, glm::length(glm::dvec3(image.rgb[p]) - ring_mean) - 0.5 * contrast[std::size_t(best)]);
       weighted += w * at, total += w;
     }
   const glm::dvec2 pixel = total > 0 ? weighted / total : glm::dvec2(bx + 0.5, by + 0.5);
@@ -189,6 +188,17 @@ TriangulatedPoint triangulate(const std::vector<io::Camera>& cameras, const std:
     out.reason = "the views' rays are parallel";
     return out;
   }
+  // The refit must keep what the proposal promised: every kept view within the bound, and rays
+  // that meet at the minimum angle.
+  for (const EyeObservation& o : best)
+    if (reprojection_error(cameras[o.view], o, *x) > max_error_px) {
+      out.reason = "the two views left disagree by more than " + std::to_string(max_error_px) + " px";
+      return out;
+    }
+  if (const double widest = widest_angle_deg(cameras, best, *x); widest < min_angle_deg) {
+    out.reason = "the views that agree see it from within " + std::to_string(widest) + " degrees";
+    return out;
+  }
   double sum2 = 0;
   for (const EyeObservation& o : best) sum2 += std::pow(reprojection_error(cameras[o.view], o, *x), 2);
   out.position = x;
@@ -229,9 +239,9 @@ PhotoEyes find_eyes_in_photos(const io::Scene& scene, const EyeSearch& search) {
     for (int e = 0; e < 2; ++e) {
       if (radius_px[e] <= 0) continue;
       const glm::dvec3 p = cam.project(fitted[e]);
-      // The fit's eyes may be a fifth of the eye distance off each: search that far, and more.
+      // The fit's eyes may be a third of the eye distance off each: search that far.
       const double search_px = std::max(2.0 * radius_px[e], cam.fx * 0.3 * eye_distance / p.z);
-      if (const auto hit = find_eye_blob(face, glm::dvec2(p), search_px, radius_px[e], 0.05)) {
+      if (const auto hit = find_eye_blob(face, glm::dvec2(p), search_px, radius_px[e], kMinEyeContrast)) {
         seen[e].push_back({v, hit->pixel});
         radii_px.push_back(radius_px[e]);
       }

@@ -1,9 +1,8 @@
 #pragma once
 // The eyes found in the photos rather than taken from the template: the fitted face says where to
-// look in each view that sees it, the eye is the round blob there that differs most from the fur
-// around it in colour (a dark pupil and rim, a coloured iris, a highlight), and the detections of
-// several views are triangulated, the views that disagree dropped. An individual's eyes, not its kind's: the metric scale's eye cue and
-// the fit's eye error both gain (issue 42: fitted eyes of unseen animals were 20-40 % too far apart).
+// look in each view that sees it, the eye is the blob there that differs most from the fur around
+// it in colour (a dark pupil and rim, a coloured iris, a highlight), and the detections of several
+// views are triangulated, the views that disagree dropped: an individual's eyes, not its kind's.
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -16,7 +15,7 @@
 
 namespace nf::body {
 
-// A photo (linear RGB as read) with its mask (empty: every pixel counts).
+// A photo (RGB as io::read_image gives it) with its mask (empty: every pixel counts).
 struct FaceImage {
   std::uint32_t width = 0, height = 0;
   std::vector<glm::vec3> rgb;
@@ -28,12 +27,16 @@ struct BlobHit {
   double contrast;   // the colour distance between the blob's mean and its surround's
 };
 
-// The round blob of radius `radius` (pixels), centred within `search_radius` of `centre`, whose
-// mean colour differs most from its surround's (a box of `radius` against the ring out to twice
-// it), refined to sub-pixel. Blobs whose ring leaves the mask are skipped (the silhouette's edge is
+// The blob of radius `radius` (pixels), centred within `search_radius` of `centre`, whose mean
+// colour differs most from its surround's (a square of half-side `radius` against the square ring
+// out to twice it), refined to sub-pixel. Blobs whose ring leaves the mask are skipped (the silhouette's edge is
 // not an eye). None when no candidate reaches `min_contrast`.
 std::optional<BlobHit> find_eye_blob(const FaceImage& image, glm::dvec2 centre, double search_radius, double radius,
                                       double min_contrast);
+
+// The least colour distance (RGB in [0, 1]) between an eye and the fur around it: above a photo's
+// noise averaged over a few pixels, below an olive iris in brown fur (0.27).
+inline constexpr double kMinEyeContrast = 0.05;
 
 struct EyeObservation {
   std::uint32_t view = 0;

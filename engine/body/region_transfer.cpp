@@ -6,6 +6,7 @@
 
 #include "engine/core/error.hpp"
 #include "engine/core/parallel.hpp"
+#include "engine/geometry/mesh_tools.hpp"
 #include "engine/geometry/point_index.hpp"
 
 namespace nf::body {
@@ -24,15 +25,7 @@ std::vector<std::int32_t> nearest_regions(const geometry::Mesh& target, const ge
 RegionAccuracy region_accuracy(const geometry::Mesh& mesh, const geometry::Mesh& reference) {
   if (mesh.regions.size() != mesh.vertex_count()) throw InputError("region accuracy: the mesh has no regions");
   const std::vector<std::int32_t> truth = nearest_regions(mesh, reference);
-  std::vector<double> vertex_area(mesh.vertex_count(), 0.0);
-  for (std::size_t f = 0; f < mesh.triangle_count(); ++f) {
-    const std::uint32_t* t = &mesh.triangles[3 * f];
-    const auto p = [&](int k) {
-      return glm::dvec3(mesh.positions[3 * t[k]], mesh.positions[3 * t[k] + 1], mesh.positions[3 * t[k] + 2]);
-    };
-    const double a = 0.5 * glm::length(glm::cross(p(1) - p(0), p(2) - p(0))) / 3.0;
-    for (int k = 0; k < 3; ++k) vertex_area[t[k]] += a;
-  }
+  const std::vector<double> vertex_area = geometry::vertex_areas(mesh);
   RegionAccuracy r;
   std::array<double, kRegionCount> correct{};
   double total = 0, right = 0;

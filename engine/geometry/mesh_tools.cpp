@@ -109,6 +109,17 @@ void compute_vertex_normals(geometry::Mesh& mesh) {
   }
 }
 
+std::vector<double> vertex_areas(const geometry::Mesh& mesh) {
+  std::vector<double> area(mesh.vertex_count(), 0.0);
+  for (std::size_t f = 0; f < mesh.triangle_count(); ++f) {
+    const std::uint32_t* t = &mesh.triangles[3 * f];
+    const glm::dvec3 a(mesh.position(t[0])), b(mesh.position(t[1])), c(mesh.position(t[2]));
+    const double third = glm::length(glm::cross(b - a, c - a)) / 6.0;
+    for (int k = 0; k < 3; ++k) area[t[k]] += third;
+  }
+  return area;
+}
+
 Bounds mesh_bounds(const geometry::Mesh& mesh) {
   Bounds b;
   if (mesh.vertex_count() == 0) return b;

@@ -28,6 +28,8 @@ struct Bounds {
   float diagonal() const { return glm::length(hi - lo); }
 };
 Bounds mesh_bounds(const geometry::Mesh& mesh);
+// Each vertex's area: a third of its triangles' areas (what area-weighted shares of a surface sum).
+std::vector<double> vertex_areas(const geometry::Mesh& mesh);
 // True when every undirected edge is used by exactly two triangles, once in each direction
 // (consistent orientation), no triangle repeats a vertex, and the triangles around every used
 // vertex form a single fan (no pinched vertices). An empty mesh is closed.

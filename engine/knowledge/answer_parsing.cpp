@@ -522,10 +522,18 @@ double eye_distance_cm_of(const std::string& text, const std::string& where) {
 }
 
 double body_length_cm_of(const std::string& text, const std::string& where) {
-  for (const FoundObject& o : find_objects(text))
-    for (const auto& [key, value] : o.value.items())
-      if (key_has_any(key, {"length", "body"}) && !key_has_any(key, {"tail"}) && (value.is_number() || value.is_string()))
-        return length_cm_of(value, where + ": " + key);
+  const std::vector<FoundObject> objects = find_objects(text);
+  // A key naming the body first, then any length; never the tail's. A unit at the key's end
+  // ("_m", "_mm", "_in") scales a bare number; else cm, as the question asks.
+  for (const std::vector<std::string>& hints : {std::vector<std::string>{"body"}, std::vector<std::string>{"length"}})
+    for (const FoundObject& o : objects)
+      for (const auto& [key, value] : o.value.items()) {
+        if (!key_has_any(key, hints) || key_has_any(key, {"tail"}) || !(value.is_number() || value.is_string())) continue;
+        const std::string k = to_lower(key);
+        const double unit = k.ends_with("_mm") ? 0.1 : k.ends_with("_m") || k.ends_with("metres") || k.ends_with("meters") ? 100.0
+                            : k.ends_with("_in") || k.ends_with("inches") ? 2.54 : 1.0;
+        return value.is_number() ? unit * length_cm_of(value, where + ": " + key) : length_cm_of(value, where + ": " + key);
+      }
   if (const std::optional<double> cm = first_length_cm_in_prose(text, true)) return *cm;  // a lion's is 1.9 m
   throw InputError(where + ": the answer gives no length in cm");
 }

@@ -1,6 +1,7 @@
 #include "engine/knowledge/consensus.hpp"
 
 #include <algorithm>
+#include <map>
 
 #include "engine/core/error.hpp"
 
@@ -29,6 +30,13 @@ Consensus consensus(const std::vector<Knowledge>& samples) {
   for (const Knowledge& k : samples) hairs.push_back(k.hair_diameter_mm);
   out.knowledge.hair_diameter_mm = float(median(hairs));
   out.spread["hair_diameter_mm"] = {*std::min_element(hairs.begin(), hairs.end()), *std::max_element(hairs.begin(), hairs.end())};
+  // Where values came from: what most samples say (a value the consensus took from most answers).
+  std::map<std::string, std::map<std::string, std::size_t>> origins;
+  for (const Knowledge& k : samples)
+    for (const auto& [field, from] : k.origin) ++origins[field][from];
+  for (const auto& [field, votes] : origins)
+    for (const auto& [from, count] : votes)
+      if (2 * count > samples.size()) out.knowledge.origin[field] = from;
   std::vector<double> bodies;
   for (const Knowledge& k : samples)
     if (k.body_length_cm) bodies.push_back(*k.body_length_cm);

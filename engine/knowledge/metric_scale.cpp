@@ -54,10 +54,11 @@ MetricScale metric_scale(const ScaleInputs& in) {
   if (!positive(s.cm_per_unit))
     throw InputError("knowledge: no metric scale: the fitted body's eyes are " + std::to_string(in.eye_distance_units) +
                      " scene units apart and the eye distance is " + std::to_string(in.eye_distance_cm) +
-                     " cm; give the scale with --scene-scale CM_PER_UNIT");
+                     " cm, and no head-and-body length pairs the knowledge's with the fit's; give the scale with "
+                     "--scene-scale CM_PER_UNIT");
 
   std::vector<std::string> problems;
-  if (s.spread == 0 && s.from_cues) {  // a given unit: each cue checked against it
+  if ((in.user_given || in.scene_declared) && s.from_cues) {  // a given unit: each cue checked against it
     s.disagreement = s.cm_per_unit / *s.from_cues - 1.0;
     const std::string given = s.source == "scene" ? "the scene file" : "--scene-scale";
     for (const ScaleCue& c : s.cues) {

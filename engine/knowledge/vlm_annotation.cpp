@@ -131,16 +131,16 @@ bool read_verification(const std::string& text, PartialKnowledge& k, std::vector
   return true;
 }
 
-
 bool is_table_step(const std::string& step) { return step == "length" || step == "thickness" || step == "direction"; }
 
 // One answer to the length, thickness or direction prompt into `k`. Throws InputError naming the
-// region and field of the first value it refuses.
+// region and field of the first value it refuses; a length answer must give `body` unless
+// `body_given` (the fallback gives it).
 void read_table_step(const std::string& step, const std::vector<FoundObject>& objects, PartialKnowledge& k,
-                     std::vector<std::string>& warnings, const std::string& at) {
+                     std::vector<std::string>& warnings, const std::string& at, bool body_given = false) {
   if (step == "length" || step == "thickness") {
     const RegionValues<double> v = table_in(objects, step == "length" ? 'L' : 'T', at);
-    if (step == "length" && std::none_of(v.values.begin(), v.values.end(), [](const auto& e) { return e.first == Region::body; }))
+    if (step == "length" && !body_given && std::none_of(v.values.begin(), v.values.end(), [](const auto& e) { return e.first == Region::body; }))
       throw InputError(at + ": no length for 'body', the region every other one falls back on");
     note_unknown(v.unknown, step, warnings);
     for (const auto& [r, cm] : v.values) (step == "length" ? k.length : k.thickness)[std::size_t(r)] = cm;
@@ -204,7 +204,8 @@ void fall_back_on_table(const std::string& step, const std::string& answer, cons
     for (FoundObject& o : objects) erase_region(o.value, *r);
     try {
       PartialKnowledge attempt = k;
-      read_table_step(step, objects, attempt, out.warnings, at);
+      const bool body_refused = std::find(refused.begin(), refused.end(), Region::body) != refused.end();
+      read_table_step(step, objects, attempt, out.warnings, at, body_refused && fallback.has(Region::body));
       k = attempt;
       break;
     } catch (const InputError& e) {
@@ -297,6 +298,10 @@ Annotation annotate_with_vlm(const ChatFunction& chat, const AnnotationImages& i
         }
         if (attempt > 0 && fallback && is_table_step(prompt.step)) {
           fall_back_on_table(prompt.step, answer, e.what(), *fallback, k, out, at);
+          break;
+        }
+        if (attempt > 0 && fallback && prompt.step == "verify") {  // it only corrects: what stood before stands
+          out.warnings.push_back("the verify answer stayed unusable (" + std::string(e.what()) + "): the earlier values stand");
           break;
         }
         if (attempt > 0 && fallback && prompt.step == "eyes") {

@@ -52,6 +52,8 @@ EyesFound eyes_of(const io::Scene& scene, const body::BodyModel& model, const bo
   const json fitted_json{{"left", json_vec3(fitted.left)}, {"right", json_vec3(fitted.right)}, {"distance", glm::distance(fitted.left, fitted.right)}};
   out.record = {{"unit", "scene units"}, {"fitted", fitted_json}, {"source", "fit"}};
   const std::optional<body::HeadAxis> head = body::head_axis(model, joints);
+  if (from_photos && !head)
+    log::warn("body: the body model names no 'head' and 'muzzle' joints, so the eyes are not searched in the photos");
   if (from_photos && head) {
     // The eyeball's radius: the eye region's mean distance from its centre, on each side.
     double sum = 0;
@@ -115,7 +117,8 @@ json ground_truth_metrics(const StageContext& c, const geometry::Mesh& labelled,
 
 bool read_eyes_from_photos(const BodyOutputs& o) {
   const json j = io::read_json_file(o.eyes());
-  return j.value("source", std::string()) == "photos";
+  const std::optional<io::JsonField> source = io::JsonField(j, o.eyes().string()).find("source");
+  return source && source->string() == "photos";
 }
 
 glm::dmat4 read_animal_to_world(const BodyOutputs& o) {
@@ -166,6 +169,10 @@ std::vector<fs::path> BodyStage::inputs(const StageContext& c) const {
   std::vector<fs::path> files{neus_outputs(c.work).outer()};
   const BodySettings s = settings_of(c);
   if (!s.model.empty()) files.push_back(s.model);
+  if (s.photo_eyes)  // the eyes are searched in the photos
+    for (const io::Camera& cam : c.scene.cameras)
+      for (const fs::path& f : {cam.image, cam.mask})
+        if (!f.empty()) files.push_back(f);
   if (const auto gt = io::find_ground_truth(c.scene_dir))  // synth scenes: metrics.json compares with them
     for (const fs::path& f : {gt->bald(), gt->scene_json()})
       if (fs::exists(f)) files.push_back(f);
@@ -175,8 +182,10 @@ std::vector<fs::path> BodyStage::inputs(const StageContext& c) const {
 json BodyStage::parameters(const StageContext& c) const {
   json cams = json::array();
   for (const io::Camera& cam : c.scene.cameras) cams.push_back(json_vec3(glm::dvec3(cam.camera_to_world[1])));
-  return {{"stage_version", kStageVersion}, {"settings", body_settings().values(c.quality, c.settings.value("body", json::object()))},
-          {"camera_ups", cams}};
+  json key{{"stage_version", kStageVersion}, {"settings", body_settings().values(c.quality, c.settings.value("body", json::object()))},
+           {"camera_ups", cams}};
+  if (settings_of(c).photo_eyes) key["cameras"] = cameras_json(c.scene);  // the eyes are triangulated through them
+  return key;
 }
 
 json BodyStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) {
@@ -209,6 +218,9 @@ json BodyStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) {
   const glm::dmat4& a = fit.animal_to_world;
   const double scale = glm::length(glm::dvec3(a[0]));
   const std::optional<double> body_length = body::head_and_body_length(model, joints);
+  if (!body_length)
+    log::warn("body: the body model does not name the joints from the nose to the tail's root (nose, muzzle, head, neck, chest, "
+              "spine, pelvis, tail_0), so the metric scale has no head-and-body length to go on");
   write_file_atomic(out.animal_frame(), json{{"animal_to_world", json_matrix_rows(a)},
                                              {"head_and_body_length", body_length ? json(*body_length) : json()},
                                              {"origin", json_vec3(glm::dvec3(a[3]))},

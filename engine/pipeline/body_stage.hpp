@@ -42,7 +42,7 @@ struct BodySettings {
   body::BodyFitOptions fit;
   std::string model;  // "" (the built-in quadruped family) or a SMAL-layout .npz
   int preview_views = 2;
-  int photo_eyes = 0;  // find the eyes in the photos (else the fit's); off: on synth scenes no better than the fit (docs/method.md)
+  int photo_eyes = 0;  // find the eyes in the photos (else the fit's); off: on synth scenes worse than the fit (docs/method.md)
 };
 const SettingsSchema<BodySettings>& body_settings();
 // The body model a run's settings name (the built-in family or a SMAL file).

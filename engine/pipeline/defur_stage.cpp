@@ -20,6 +20,7 @@
 #include "engine/metrics/surface_metrics.hpp"
 #include "engine/pipeline/body_stage.hpp"
 #include "engine/pipeline/knowledge_stage.hpp"
+#include "engine/pipeline/neus_stage.hpp"
 #include "engine/pipeline/preview_views.hpp"
 #include "engine/synth/preview.hpp"
 
@@ -93,11 +94,11 @@ json ground_truth_metrics(const StageContext& c, const geometry::Mesh& bald, con
 
 // When the knowledge grows a mane, the fitted body's neck and the back of its head become mane on
 // `surface` (body::label_mane): the template has no mane of its own.
-body::ManeLabelling label_mane(const body::BodyModel& model, const body::BodyFit& fit, const geometry::Mesh& fitted,
-                               geometry::Mesh& surface) {
+body::ManeLabelling label_mane_from_fit(const body::BodyModel& model, const body::BodyFit& fit, const geometry::Mesh& fitted,
+                                        geometry::Mesh& surface, const std::string& source) {
   const std::optional<body::HeadAxis> head = body::head_axis(model, body::fitted_joints(model, fit));
   if (!head) log::warn("defur: the body model has no 'head' and 'muzzle' joints: only its neck becomes the mane");
-  return body::label_mane(surface, fitted, head);
+  return body::label_mane(surface, fitted, head, source);
 }
 
 }  // namespace
@@ -105,8 +106,7 @@ body::ManeLabelling label_mane(const body::BodyModel& model, const body::BodyFit
 std::vector<fs::path> DefurStage::inputs(const StageContext& c) const {
   const BodyOutputs body = body_outputs(c.work);
   const KnowledgeOutputs k = knowledge_outputs(c.work);
-  std::vector<fs::path> files{body.outer_regions(), body.fitted(), body.animal_frame(), body.fit_state(), k.knowledge(),
-                              k.directions_world(), k.scale()};
+  std::vector<fs::path> files{body.outer_regions(), body.fitted(), body.fit_state(), k.knowledge(), k.directions_world(), k.scale()};
   const BodySettings b = body_settings().resolve(c.quality, c.settings.value("body", json::object()));
   if (!b.model.empty()) files.push_back(b.model);
   if (const auto gt = io::find_ground_truth(c.scene_dir))
@@ -115,13 +115,10 @@ std::vector<fs::path> DefurStage::inputs(const StageContext& c) const {
 }
 
 json DefurStage::parameters(const StageContext& c) const {
-  json cams = json::array();
-  for (const io::Camera& cam : c.scene.cameras)
-    cams.push_back({cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy, json_matrix_rows(cam.camera_to_world)});
   return {{"stage_version", kStageVersion},
           {"settings", defur_settings().values(c.quality, c.settings.value("defur", json::object()))},
           {"body", body_settings().values(c.quality, c.settings.value("body", json::object()))},  // the re-fit's schedule
-          {"cameras", cams}};
+          {"cameras", cameras_json(c.scene)}};
 }
 
 json DefurStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) {
@@ -145,12 +142,12 @@ json DefurStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) 
   const bool has_mane = knowledge.grows_fur(body::Region::mane);
   json mane;
   if (has_mane) {
-    const body::ManeLabelling m = label_mane(model, fit, io::read_mesh(body_files.fitted()), outer);
+    const body::ManeLabelling m = label_mane_from_fit(model, fit, io::read_mesh(body_files.fitted()), outer, body_files.fitted().string());
     log::info("defur: the knowledge grows a mane: ", m.vertices, " vertices of M_NeuS (", 100.0 * m.area_share,
               " % of its area) on the fitted neck and the back of its head");
     mane = {{"outer", body::to_json(m)}};
   }
-  seconds["mane"] = t.seconds();
+  seconds["fit_and_mane"] = t.seconds();
 
   defur::DefurOptions options;
   options.resolution = s.resolution, options.target_faces = std::uint64_t(s.faces);
@@ -173,7 +170,7 @@ json DefurStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) 
   if (s.refit) {
     const body::BodyFit refit = body::refit_body(model, bald, fit, b.fit, out.bald().string());
     bald.regions = body::nearest_regions(bald, refit.fitted);
-    if (has_mane) mane["bald"] = body::to_json(label_mane(model, refit, refit.fitted, bald));
+    if (has_mane) mane["bald"] = body::to_json(label_mane_from_fit(model, refit, refit.fitted, bald, out.refit().string()));
     io::write_mesh_ply(out.refit(), refit.fitted);
     refit_summary = {{"chamfer_mean", refit.chamfer_mean}, {"relative_chamfer", refit.relative_chamfer},
                      {"low_confidence", refit.low_confidence}};

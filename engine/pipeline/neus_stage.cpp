@@ -30,22 +30,6 @@ neus::NeusQuality settings_of(const StageContext& c) {
   return neus_settings().resolve(c.quality, c.settings.value("neus", json::object()));
 }
 
-json cameras_json(const io::Scene& scene) {
-  json cams = json::array();
-  for (const io::Camera& c : scene.cameras) {
-    json m = json::array();
-    for (int col = 0; col < 4; ++col)
-      for (int row = 0; row < 4; ++row) m.push_back(c.camera_to_world[col][row]);
-    cams.push_back({{"name", c.name},
-                    {"size", {c.width, c.height}},
-                    {"f", {c.fx, c.fy}},
-                    {"c", {c.cx, c.cy}},
-                    {"pose", m},
-                    {"image", c.image.filename().string()},
-                    {"mask", c.mask.filename().string()}});
-  }
-  return cams;
-}
 
 // Ground truth when the scene is an `nf_gpu synth` scene: chamfer against its fur envelope.
 json ground_truth_metrics(const StageContext& c, const geometry::Mesh& mesh, const neus::OccupancyGrid& hull) {
@@ -89,6 +73,23 @@ json use_envelope_file(const StageContext& c, const neus::NeusQuality& q, const 
 }
 
 }  // namespace
+
+json cameras_json(const io::Scene& scene) {
+  json cams = json::array();
+  for (const io::Camera& c : scene.cameras) {
+    json m = json::array();
+    for (int col = 0; col < 4; ++col)
+      for (int row = 0; row < 4; ++row) m.push_back(c.camera_to_world[col][row]);
+    cams.push_back({{"name", c.name},
+                    {"size", {c.width, c.height}},
+                    {"f", {c.fx, c.fy}},
+                    {"c", {c.cx, c.cy}},
+                    {"pose", m},
+                    {"image", c.image.filename().string()},
+                    {"mask", c.mask.filename().string()}});
+  }
+  return cams;
+}
 
 std::vector<fs::path> NeusStage::inputs(const StageContext& c) const {
   std::vector<fs::path> files;

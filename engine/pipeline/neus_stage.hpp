@@ -20,6 +20,8 @@ struct NeusOutputs {
 inline NeusOutputs neus_outputs(const std::filesystem::path& work) { return {work / "neus"}; }
 
 const SettingsSchema<neus::NeusQuality>& neus_settings();
+// Every camera's name, size, intrinsics and pose, as the stages that read the photos key them.
+json cameras_json(const io::Scene& scene);
 
 class NeusStage : public Stage {
  public:

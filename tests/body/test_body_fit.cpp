@@ -292,8 +292,8 @@ TEST_CASE("a fitted lion (z-up, in centimetres): its head-and-body length, and t
   REQUIRE(true_length.has_value());
   REQUIRE(fitted_length.has_value());
   MESSAGE("head and body: fitted " << *fitted_length << " cm, true " << *true_length << " cm");
-  CHECK(*fitted_length == doctest::Approx(*true_length).epsilon(0.1));
-  const ManeLabelling m = label_mane(labelled, fit.fitted, head);
+  CHECK(*fitted_length == doctest::Approx(*true_length).epsilon(0.01));
+  const ManeLabelling m = label_mane(labelled, fit.fitted, head, "fit");
   const RegionAccuracy after = region_accuracy(labelled, lion);
   MESSAGE("lion: mane recall " << 100 * after.recall[std::size_t(Region::mane)] << " %, accuracy " << 100 * before.accuracy
                                << " -> " << 100 * after.accuracy << " %, mane " << 100 * m.area_share << " % of the area");
@@ -303,7 +303,7 @@ TEST_CASE("a fitted lion (z-up, in centimetres): its head-and-body length, and t
   // Without a head axis only the neck becomes mane.
   geometry::Mesh neck_only = lion;
   neck_only.regions = nearest_regions(lion, fit.fitted);
-  const ManeLabelling n = label_mane(neck_only, fit.fitted, std::nullopt);
+  const ManeLabelling n = label_mane(neck_only, fit.fitted, std::nullopt, "fit");
   CHECK_FALSE(n.head_known);
   CHECK(n.area_share < m.area_share);
   CHECK(n.area_share > 0);

@@ -4,11 +4,13 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <random>
 
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "engine/body/photo_eyes.hpp"
+#include "engine/io/image.hpp"
 
 using namespace nf;
 using namespace nf::body;
@@ -74,9 +76,10 @@ TEST_CASE("an eye of the fur's brightness is found by its colour (an olive iris 
 
 TEST_CASE("the search stays in its window and on the animal; a face without an eye gives none") {
   FaceImage g = face_with_eye({20, 20}, 2.0, 3);
-  // A darker, larger blob outside the window is not taken.
-  for (std::uint32_t y = 40; y < 52; ++y)
-    for (std::uint32_t x = 40; x < 52; ++x) g.rgb[y * 64 + x] = glm::vec3(0.05f);
+  // A darker blob of the eye's size just outside the search disc (but inside the filters' reach)
+  // is not taken.
+  for (std::uint32_t y = 29; y < 33; ++y)
+    for (std::uint32_t x = 29; x < 33; ++x) g.rgb[y * 64 + x] = glm::vec3(0.0f);
   const auto hit = find_eye_blob(g, {22, 22}, 6.0, 2.0, 0.05);
   REQUIRE(hit.has_value());
   CHECK(glm::distance(hit->pixel, glm::dvec2(20, 20)) < 0.5);
@@ -117,4 +120,55 @@ TEST_CASE("triangulation keeps the views that agree, drops a wrong detection, an
   const TriangulatedPoint same = triangulate(twins, {{0, seen[0].pixel}, {1, seen[0].pixel}}, 1.5);
   CHECK_FALSE(same.position.has_value());
   CHECK_FALSE(same.reason.empty());
+  // Two views 2 degrees apart agree, but meet at too narrow an angle to place the eye in depth.
+  const std::vector<io::Camera> close{camera_looking_at(eye + 2.0 * glm::dvec3(0, 0.3, 1), eye),
+                                      camera_looking_at(eye + 2.0 * glm::dvec3(std::sin(0.035), 0.3, std::cos(0.035)), eye)};
+  const TriangulatedPoint narrow =
+      triangulate(close, {{0, glm::dvec2(close[0].project(eye))}, {1, glm::dvec2(close[1].project(eye))}}, 1.5);
+  CHECK_FALSE(narrow.position.has_value());
+  CHECK(narrow.reason.find("degrees") != std::string::npos);
 }
+
+TEST_CASE("eyes found in photos: a rig of views round a face with two eyes, the fit's eyes 1 cm off") {
+  // A face seen by seven cameras from -54 to +54 degrees; each photo a light face with the two
+  // eyes (1 cm radius, 6 cm apart) drawn as dark discs where the camera sees them.
+  const glm::dvec3 eyes[2] = {{0.03, 0.0, 0.05}, {-0.03, 0.0, 0.05}};
+  const double eye_radius = 0.01;
+  const auto dir = std::filesystem::temp_directory_path() / "nf_test_photo_eyes";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  io::Scene scene;
+  for (int k = 0; k < 7; ++k) {
+    const double a = (-54.0 + 18.0 * k) * M_PI / 180.0;
+    io::Camera c = camera_looking_at(0.5 * glm::dvec3(std::sin(a), 0.2, std::cos(a)), {0, 0, 0});
+    c.name = "view" + std::to_string(k);
+    io::Image photo;
+    photo.width = c.width, photo.height = c.height, photo.channels = 3;
+    photo.pixels.assign(std::size_t(c.width) * c.height * 3, 0.6f);
+    for (const glm::dvec3& e : eyes) {
+      if (glm::dot(glm::normalize(e), glm::normalize(glm::dvec3(c.camera_to_world[3]) - e)) < 0.2) continue;  // turned away
+      const glm::dvec3 p = c.project(e);
+      const double r = c.fx * eye_radius / p.z;
+      for (std::uint32_t y = 0; y < c.height; ++y)
+        for (std::uint32_t x = 0; x < c.width; ++x)
+          if (glm::distance(glm::dvec2(x + 0.5, y + 0.5), glm::dvec2(p)) < r)
+            for (std::size_t ch = 0; ch < 3; ++ch) photo.pixels[(std::size_t(y) * c.width + x) * 3 + ch] = 0.15f;
+    }
+    c.image = dir / (c.name + ".png");
+    io::write_png(c.image, photo);
+    scene.cameras.push_back(c);
+  }
+  const EyeSearch search{eyes[0] + glm::dvec3(0.006, 0.004, -0.006), eyes[1] + glm::dvec3(-0.008, -0.003, 0.004), {0, 0, 0}, eye_radius};
+  const PhotoEyes found = find_eyes_in_photos(scene, search);
+  CHECK(found.views_facing == 7);
+  REQUIRE(found.left.position.has_value());
+  REQUIRE(found.right.position.has_value());
+  CHECK(glm::distance(*found.left.position, eyes[0]) < 0.002);
+  CHECK(glm::distance(*found.right.position, eyes[1]) < 0.002);
+  REQUIRE(found.distance().has_value());
+  CHECK(*found.distance() == doctest::Approx(0.06).epsilon(0.03));
+  CHECK(found.left.views.size() >= 4);
+  CHECK(found.left.reprojection_rms_px < 1.0);
+  std::filesystem::remove_all(dir);
+}
+

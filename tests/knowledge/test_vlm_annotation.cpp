@@ -70,6 +70,7 @@ TEST_CASE("the head-and-body length: read in cm, m or prose, never a tail's; no 
   CHECK(body_length_cm_of(R"({"body_length_cm": 46})", "body") == doctest::Approx(46));
   CHECK(body_length_cm_of(R"({"tail_length_cm": 30, "head_and_body_length": "0.5 m"})", "body") == doctest::Approx(50));
   CHECK(body_length_cm_of("An adult lion measures 1.9 m from nose to tail base.", "body") == doctest::Approx(190));
+  CHECK(body_length_cm_of(R"({"length_cm": 5, "body_length_m": 1.9})", "body") == doctest::Approx(190));  // the body's key first, in m
   CHECK_THROWS_WITH_AS(body_length_cm_of("Hard to say.", "body"), doctest::Contains("no length"), InputError);
   ScriptedModel vague;
   vague.answers["body"] = "It depends on the breed.";
@@ -108,6 +109,19 @@ TEST_CASE("an answer that stays unusable: the animal's preset stands in for the 
   const Annotation c = annotate_with_vlm(std::ref(blind), kImages, "test", &cat);
   CHECK(c.knowledge.eye_distance_cm == doctest::Approx(cat.eye_distance_cm));
   CHECK(c.knowledge.origin.at("eye_distance_cm") == "preset:cat");
+  // The refused region is `body`, which the length answer must give: the preset gives it, the rest stands.
+  ScriptedModel no_body;
+  no_body.answers["length"] = R"({"body": 75, "tail": 2})";
+  no_body.answers["verify"] = R"({"thickness": {"body": 0.4}})";
+  const Annotation d = annotate_with_vlm(std::ref(no_body), kImages, "test", &cat);
+  CHECK(d.knowledge.at(Region::body).length_cm == doctest::Approx(cat.at(Region::body).length_cm));
+  CHECK(d.knowledge.at(Region::tail).length_cm == doctest::Approx(2.0));
+  CHECK(d.knowledge.origin.at("regions.body.length_cm") == "preset:cat");
+  // A verify answer that stays out of range keeps the values before it.
+  ScriptedModel wild;
+  wild.answers["verify"] = R"({"length": {"body": 90}})";
+  const Annotation e = annotate_with_vlm(std::ref(wild), kImages, "test", &cat);
+  CHECK(e.knowledge.at(Region::body).length_cm == doctest::Approx(1.0));
   // Without a preset the stage still stops, naming the region and field.
   CHECK_THROWS_WITH_AS(annotate_with_vlm(std::ref(one), kImages, "test"), doctest::Contains("regions.tail.length_cm = 75"), InputError);
   // The fill rules are recorded too, and the record survives knowledge.json.
