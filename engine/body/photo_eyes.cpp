@@ -41,12 +41,7 @@ class BoxSums {
   std::vector<double> inside_;
 };
 
-glm::dvec3 camera_position(const io::Camera& c) { return glm::dvec3(c.camera_to_world[3]); }
-
-glm::dvec3 ray_direction(const io::Camera& c, glm::dvec2 pixel) {
-  const glm::dvec3 in_camera((pixel.x - c.cx) / c.fx, -(pixel.y - c.cy) / c.fy, -1.0);  // OpenGL axes
-  return glm::normalize(glm::dmat3(c.camera_to_world) * in_camera);
-}
+glm::dvec3 ray_direction(const io::Camera& c, glm::dvec2 pixel) { return glm::normalize(c.unproject(pixel, 1.0) - c.centre()); }
 
 FaceImage face_image_of(const io::Camera& camera) {
   const io::Image photo = io::read_image(camera.image);
@@ -122,7 +117,7 @@ std::optional<glm::dvec3> closest_point(const std::vector<io::Camera>& cameras, 
     const io::Camera& c = cameras[o.view];
     const glm::dvec3 d = ray_direction(c, o.pixel);
     const glm::dmat3 p = glm::dmat3(1.0) - glm::outerProduct(d, d);
-    a += p, b += p * camera_position(c);
+    a += p, b += p * c.centre();
   }
   if (std::fabs(glm::determinant(a)) < 1e-12) return std::nullopt;
   return glm::inverse(a) * b;
@@ -137,8 +132,8 @@ double widest_angle_deg(const std::vector<io::Camera>& cameras, const std::vecto
   double widest = 0;
   for (std::size_t i = 0; i < observations.size(); ++i)
     for (std::size_t j = i + 1; j < observations.size(); ++j) {
-      const glm::dvec3 u = glm::normalize(camera_position(cameras[observations[i].view]) - x);
-      const glm::dvec3 v = glm::normalize(camera_position(cameras[observations[j].view]) - x);
+      const glm::dvec3 u = glm::normalize(cameras[observations[i].view].centre() - x);
+      const glm::dvec3 v = glm::normalize(cameras[observations[j].view].centre() - x);
       widest = std::max(widest, std::acos(std::clamp(glm::dot(u, v), -1.0, 1.0)) * 180.0 / M_PI);
     }
   return widest;
@@ -226,7 +221,7 @@ PhotoEyes find_eyes_in_photos(const io::Scene& scene, const EyeSearch& search) {
     double radius_px[2] = {0, 0};
     for (int e = 0; e < 2; ++e) {
       const glm::dvec3 outward = glm::normalize(fitted[e] - search.head_centre);
-      const glm::dvec3 to_camera = glm::normalize(camera_position(cam) - fitted[e]);
+      const glm::dvec3 to_camera = glm::normalize(cam.centre() - fitted[e]);
       const glm::dvec3 p = cam.project(fitted[e]);
       if (glm::dot(outward, to_camera) < std::cos(70.0 * M_PI / 180.0) || p.z <= 0) continue;
       radius_px[e] = cam.fx * search.eye_radius / p.z;

@@ -36,8 +36,7 @@ std::vector<io::Image> nonbald_masks(gpu::Context& gpu, const geometry::Mesh& la
           const float d = depth[y * cam.width + x];
           if (!std::isfinite(d)) continue;
           ++animal[y];
-          const glm::dvec3 ray((double(x) + 0.5 - cam.cx) / cam.fx, -(double(y) + 0.5 - cam.cy) / cam.fy, -1.0);
-          const glm::dvec3 world = glm::dvec3(cam.camera_to_world * glm::dvec4(double(d) * ray, 1.0));
+          const glm::dvec3 world = cam.unproject({double(x) + 0.5, double(y) + 0.5}, double(d));
           const float q[3]{float(world.x), float(world.y), float(world.z)};
           const std::uint32_t v = index.nearest(q).first;
           if (knowledge.grows_fur(body::Region(labelled.regions[v]))) mask.pixels[y * cam.width + x] = 1.f, ++fur[y];

@@ -16,6 +16,11 @@ glm::dvec3 Camera::project(const glm::dvec3& world) const {
   return {cx + fx * c.x / depth, cy - fy * c.y / depth, depth};
 }
 
+glm::dvec3 Camera::unproject(const glm::dvec2& pixel, double depth) const {
+  const glm::dvec3 in_camera((pixel.x - cx) / fx, -(pixel.y - cy) / fy, -1.0);  // OpenGL: the camera looks down -z
+  return glm::dvec3(camera_to_world * glm::dvec4(in_camera * depth, 1.0));
+}
+
 glm::dmat4 opencv_to_opengl(const glm::dmat4& c2w) {
   glm::dmat4 flip(1.0);
   flip[1][1] = -1.0;

@@ -24,6 +24,10 @@ struct Camera {
   // Pixel coordinates (x right, y down, origin at the top-left corner) of a world point, and its
   // depth along the viewing direction (positive in front of the camera).
   glm::dvec3 project(const glm::dvec3& world) const;
+  // Its inverse: the world point at `depth` along the viewing direction behind pixel coordinates.
+  glm::dvec3 unproject(const glm::dvec2& pixel, double depth) const;
+  // The camera's centre (world).
+  glm::dvec3 centre() const { return glm::dvec3(camera_to_world[3]); }
 };
 
 struct Scene {

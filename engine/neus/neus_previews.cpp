@@ -24,12 +24,11 @@ json render_neus_previews(NeusField& field, const NeusTrainingData& data, const 
                                                                 mesh.positions, mesh.triangles);
     std::vector<glm::vec3> points, dirs;
     std::vector<std::size_t> where;
-    const glm::dvec3 eye(cam.camera_to_world[3]);
+    const glm::dvec3 eye = cam.centre();
     for (std::size_t p = 0; p < pixels; ++p) {
       if (!std::isfinite(depth[p])) continue;
       const double x = double(p % cam.width) + 0.5, y = double(p / cam.width) + 0.5;
-      const glm::dvec3 d_cam((x - cam.cx) / cam.fx, -(y - cam.cy) / cam.fy, -1.0);
-      const glm::dvec3 world = glm::dvec3(cam.camera_to_world * glm::dvec4(d_cam * double(depth[p]), 1.0));
+      const glm::dvec3 world = cam.unproject({x, y}, double(depth[p]));
       points.push_back(glm::vec3(data.norm.to_unit(world)));
       dirs.push_back(glm::vec3(glm::normalize(world - eye)));
       where.push_back(p);

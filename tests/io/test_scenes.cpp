@@ -74,6 +74,22 @@ void check_same(const Scene& got, const std::vector<Camera>& want) {
 
 }  // namespace
 
+TEST_CASE("a camera's unproject inverts its project, and its rays start at its centre") {
+  Camera c;
+  c.width = 640, c.height = 480, c.fx = 500, c.fy = 520, c.cx = 322.5, c.cy = 236.0;
+  const double a = 0.7;  // turned about y, moved off the origin
+  c.camera_to_world = glm::dmat4(glm::dvec4(std::cos(a), 0, -std::sin(a), 0), glm::dvec4(0, 1, 0, 0),
+                                 glm::dvec4(std::sin(a), 0, std::cos(a), 0), glm::dvec4(1.5, -0.4, 2.0, 1));
+  CHECK(glm::length(c.centre() - glm::dvec3(1.5, -0.4, 2.0)) < 1e-12);
+  for (const glm::dvec3& p : {glm::dvec3(0.1, 0.2, -0.3), glm::dvec3(-1.0, 0.5, 0.7)}) {
+    const glm::dvec3 q = c.project(p);
+    REQUIRE(q.z > 0);
+    CHECK(glm::length(c.unproject({q.x, q.y}, q.z) - p) < 1e-9);
+  }
+  // The principal point at depth 1 lies one unit down the viewing direction (-z of the camera).
+  CHECK(glm::length(c.unproject({c.cx, c.cy}, 1.0) - (c.centre() - glm::dvec3(c.camera_to_world[2]))) < 1e-12);
+}
+
 TEST_CASE("transforms.json round-trips, with per-frame intrinsics and masks") {
   const fs::path dir = fs::temp_directory_path() / "nf_scene_transforms";
   fs::create_directories(dir / "images");
