@@ -164,8 +164,22 @@ int run_synth(const std::string& out, const nf::synth::SynthOptions& options) {
 
 int run_orient(const nf::orient::SceneOrientationOptions& options) {
   nf::gpu::Context context;
-  const auto files = nf::orient::write_scene_orientations(context, options);
-  std::printf("orient: %zu views -> %s\n", files.size() / 2, options.out.string().c_str());
+  const nf::orient::SceneOrientations result = nf::orient::write_scene_orientations(context, options);
+  std::printf("orient: %zu views -> %s\n", (result.files.size() - (result.truth.empty() ? 0 : 1)) / 2, options.out.string().c_str());
+  if (!result.truth.empty()) {
+    // Against the true orientation: the figures the fur stage's orientation loss lives on.
+    std::printf("%-10s %9s %12s %10s %14s %12s\n", "camera", "pixels", "median err", "reliable", "err reliable", "weighted err");
+    double pixels = 0, median = 0, share = 0, reliable = 0, weighted = 0;
+    for (const auto& [camera, a] : result.truth) {
+      std::printf("%-10s %9llu %11.1f° %9.1f%% %13.1f° %11.1f°\n", camera.c_str(), static_cast<unsigned long long>(a.pixels), a.median_error_deg,
+                  100 * a.reliable_share, a.median_error_reliable_deg, a.weighted_error_deg);
+      pixels += double(a.pixels), median += a.median_error_deg, share += a.reliable_share, reliable += a.median_error_reliable_deg,
+          weighted += a.weighted_error_deg;
+    }
+    const double n = double(result.truth.size());
+    std::printf("%-10s %9.0f %11.1f° %9.1f%% %13.1f° %11.1f°  (means over the views)\n", "all", pixels / n, median / n, 100 * share / n,
+                reliable / n, weighted / n);
+  }
   return 0;
 }
 
@@ -427,6 +441,8 @@ int main(int argc, char** argv) {
                     "world frame of the files: y-up-m (default) or z-up-mm (z up, millimetres, metres from the origin); the photos are the same")
       ->check(CLI::IsMember(nf::synth::world_frame_names()));
   synth->add_flag("--overwrite", synth_options.overwrite, "replace an earlier synth scene in --out");
+  synth->add_flag("--true-orientation", synth_options.true_orientation,
+                  "also write gt/orientation/<camera>.exr: the true on-screen orientation of the strands (nf_gpu orient scores its maps against it)");
 
   nf::synth::PreviewOptions render_options;
   std::string render_strands, render_mesh, render_scene, render_out;

@@ -6,11 +6,14 @@
 #include <fstream>
 #include <sstream>
 
+#include <glm/gtc/matrix_transform.hpp>
+
 #include "engine/bench/record.hpp"
 #include "engine/bench/scratch_folder.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/log.hpp"
 #include "engine/core/text.hpp"
+#include "engine/knowledge/knowledge.hpp"
 #include "engine/pipeline/fur_stage.hpp"
 #include "engine/pipeline/stages.hpp"
 #include "engine/synth/synth_scene.hpp"
@@ -28,6 +31,20 @@ std::vector<std::string> env_list(const char* name, std::vector<std::string> fal
   for (std::string item; std::getline(in, item, ',');)
     if (!item.empty() && item != "none") out.push_back(item);
   return out;
+}
+
+// The knowledge a user could have been given wrong: the scene's true knowledge with every
+// region's growth direction turned by kTurnDegrees about the animal's left-right axis (more
+// downwards for hair that lies towards the tail). What the photos buy when the knowledge is wrong.
+constexpr float kTurnDegrees = 60;
+fs::path turned_knowledge_file(const fs::path& scene) { return scene.parent_path() / (scene.filename().string() + "-knowledge-turned.json"); }
+
+void write_turned_knowledge(const fs::path& scene) {
+  knowledge::Knowledge k = knowledge::read_knowledge(scene / "gt" / "knowledge.json");
+  const glm::mat3 turn(glm::rotate(glm::mat4(1.f), glm::radians(kTurnDegrees), glm::vec3(1, 0, 0)));
+  for (auto& region : k.regions)
+    if (region && glm::length(region->direction) > 0) region->direction = glm::normalize(turn * region->direction);  // [0,0,0]: none
+  knowledge::write_knowledge(turned_knowledge_file(scene), k);
 }
 
 // The settings of a variant of the run ("" : none) after the knowledge preset's. Variants join
@@ -53,10 +70,13 @@ std::vector<std::string> variant_settings(const std::string& variant, const fs::
   if (variant == "select_trained") return {"fur.select=trained"};  // the selection off
   if (variant == "lengths") return {"fur.length_lr=0.01"};         // lengths learned from the photos
   if (variant == "patches") return {"fur.patch=384"};               // native-resolution patches (off by default)
+  if (variant == "true_orientation") return {"fur.orientation_target=truth"};  // a perfect orientation map
+  if (variant == "knowledge_turned") return {"knowledge.file=" + turned_knowledge_file(scene).string()};
   for (const char* loss : {"silhouette", "orientation", "direction", "chamfer", "penetration", "curvature", "envelope"})
     if (variant == std::string("no_") + loss) return {std::string("fur.") + loss + "_weight=0"};
   throw UsageError("NF_BENCH_FUR_VARIANTS: unknown variant '" + variant +
-                   "' (warm_off, truth_knowledge, truth_knowledge_file, truth_envelope, truth_all, select_trained, lengths, patches, no_silhouette, no_orientation, "
+                   "' (warm_off, truth_knowledge, truth_knowledge_file, truth_envelope, truth_all, select_trained, lengths, patches, true_orientation, "
+                   "knowledge_turned, no_silhouette, no_orientation, "
                    "no_direction, no_chamfer, no_penetration, no_curvature, no_envelope; join with '+')");
 }
 
@@ -100,7 +120,8 @@ json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
                                                       : std::vector<std::string>{"truth_all", "truth_knowledge", "warm_off", "no_silhouette", "no_orientation",
                                                                                  "no_direction", "no_chamfer", "no_penetration", "no_curvature",
                                                                                  "truth_knowledge_file", "truth_envelope",
-                                                                                 "truth_envelope+truth_knowledge_file", "select_trained", "lengths", "patches"});
+                                                                                 "truth_envelope+truth_knowledge_file", "select_trained", "lengths", "patches",
+                                                                                 "true_orientation", "knowledge_turned"});
   for (const std::string& v : variants) variant_settings(v, root);  // unknown names fail before any work
   for (const std::string& p : presets)
     if (p != "draft" && p != "default" && p != "paper") throw UsageError("NF_BENCH_FUR_PRESETS: unknown preset '" + p + "' (draft, default, paper)");
@@ -133,6 +154,7 @@ json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
     so.views = options.quick ? 12 : 36;
     so.resolution = resolution;
     so.strands = options.quick ? 20000 : 100000;
+    so.true_orientation = true;  // for the true_orientation variant
     if (!fs::exists(scene / "gt" / "scene.json")) synth::synthesize_scene(scene, so);
     const json scene_params{{"animal", animal}, {"frame", frame}, {"views", so.views}, {"resolution", so.resolution}, {"gt_strands", so.strands}};
 
@@ -147,6 +169,7 @@ json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
       if (p == 0) runs.insert(runs.end(), variants.begin(), variants.end());
       for (const std::string& variant : runs) {
         const std::vector<std::string> swaps = variant_settings(variant, scene);
+        if (variant.find("knowledge_turned") != std::string::npos) write_turned_knowledge(scene);
         // A variant that changes a stage before fur works in its own copy of the preset run's WORK,
         // so the shared earlier stages stay as they are for the other runs.
         const bool own_work = sets_stage(swaps, "neus") || sets_stage(swaps, "knowledge");

@@ -2,13 +2,32 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <optional>
 
 #include "engine/core/error.hpp"
 #include "engine/defur/nonbald_masks.hpp"
+#include "engine/io/ground_truth.hpp"
+#include "engine/orient/orientation_io.hpp"
 #include "engine/orient/orientation_map.hpp"
 #include "engine/orient/orientation_scales.hpp"
 
 namespace nf::fur {
+namespace {
+
+orient::OrientationMap true_orientation_of(const io::Scene& scene, const io::Camera& cam) {
+  const std::optional<io::GroundTruth> gt = io::find_ground_truth(scene.root);
+  if (!gt || !std::filesystem::exists(gt->orientation(cam.name)))
+    throw InputError("fur.orientation_target=truth needs " + (gt ? gt->orientation(cam.name) : scene.root / "gt" / "orientation").string() +
+                     ": a synth scene written with --true-orientation");
+  orient::OrientationMap map = orient::read_orientation_exr(gt->orientation(cam.name));
+  if (map.orientation.width != cam.width || map.orientation.height != cam.height)
+    throw InputError(gt->orientation(cam.name).string() + ": not the size of camera '" + cam.name + "'");
+  return map;
+}
+
+}  // namespace
+
 
 io::Camera scaled_crop(const io::Camera& camera, double sx, double sy, std::uint32_t x0, std::uint32_t y0, std::uint32_t width,
                        std::uint32_t height) {
@@ -31,7 +50,7 @@ FurView make_fur_view(gpu::Context& gpu, const io::Scene& scene, std::uint32_t c
     throw InputError(cam.mask.string() + ": the mask does not have camera '" + cam.name + "''s size");
   if (nonbald && (nonbald->width != cam.width || nonbald->height != cam.height))
     throw InputError("fur: the non-bald mask of camera '" + cam.name + "' does not have the camera's size (rerun the defur stage)");
-  const orient::OrientationMap gabor = orient::gabor_orientation(gpu, photo, &mask, options.gabor);
+  const orient::OrientationMap gabor = options.true_orientation ? true_orientation_of(scene, cam) : orient::gabor_orientation(gpu, photo, &mask, options.gabor);
   // The mask eroded by the outline band: no orientation target where the filters see the outline.
   const int outline = options.outline_px >= 0 ? options.outline_px
                                               : int(std::ceil(options.gabor.support * std::max(options.gabor.sigma_x, options.gabor.sigma_y)));

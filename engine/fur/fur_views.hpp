@@ -48,6 +48,9 @@ struct FurViewOptions {
   // resolution use the photo's own map only.
   std::uint32_t gabor_scales = 1;
   orient::GaborParams gabor;
+  // The scene's true orientation map (gt/orientation/<camera>.exr, synth --true-orientation) in
+  // place of the photo's Gabor map, with one scale: what a perfect map would buy.
+  bool true_orientation = false;
 };
 
 struct FurView {

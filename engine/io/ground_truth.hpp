@@ -4,6 +4,7 @@
 // `nf_gpu metrics` compare against it when it is there; real scenes have none.
 #include <filesystem>
 #include <optional>
+#include <string>
 
 #include "engine/core/json.hpp"
 
@@ -19,6 +20,8 @@ struct GroundTruth {
   std::filesystem::path bald() const { return dir / "bald.ply"; }        // the body, region per vertex
   std::filesystem::path strands() const { return dir / "strands.hair"; }
   std::filesystem::path knowledge() const { return dir / "knowledge.json"; }
+  // The true orientation map of a camera's photo (synth --true-orientation), when it was written.
+  std::filesystem::path orientation(const std::string& camera) const { return dir / "orientation" / (camera + ".exr"); }
 };
 
 // nullopt when `scene_dir`/gt/scene.json does not exist; InputError naming the file when it exists

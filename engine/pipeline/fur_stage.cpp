@@ -169,6 +169,9 @@ std::vector<fs::path> FurStage::inputs(const StageContext& c) const {
     if (settings_of(c).truth != "none")
       for (const fs::path& p : {gt->bald(), gt->knowledge(), gt->scene_json()})
         if (fs::exists(p)) files.push_back(p);
+    if (settings_of(c).orientation_target == "truth")
+      for (const io::Camera& cam : c.scene.cameras)
+        if (fs::exists(gt->orientation(cam.name))) files.push_back(gt->orientation(cam.name));
   }
   return files;
 }
@@ -245,6 +248,7 @@ json make_views(StageContext& c, const FurSettings& s, FurInputs& in, const fs::
   const std::vector<std::string> names = io::view_file_names(c.scene, all);
   fur::FurViewOptions view_options;
   view_options.max_side = s.resolution, view_options.margin_px = s.margin_px;
+  view_options.true_orientation = s.orientation_target == "truth";
   const fs::path masks = defur_outputs(c.work).masks();
   if (s.patch) {
     in.patches = std::make_unique<fur::FurPatches>(c.gpu, in.bald, scratch / "patches", s.patch);
@@ -266,7 +270,9 @@ json make_views(StageContext& c, const FurSettings& s, FurInputs& in, const fs::
         // The scales the photo's strands need (fur_resolution.hpp), from the fur's length in it.
         fur::FurView probe;
         probe.crop = c.scene.cameras[v], probe.scale = 1;
-        o.gabor_scales = fur::gabor_scales_for(fur::fur_length_pixels(probe, in.data.roots), s.training.resolved_fur_px, s.gabor_scales);
+        // (A true orientation map has one scale: the photo's own.)
+        o.gabor_scales = o.true_orientation ? 1
+                                            : fur::gabor_scales_for(fur::fur_length_pixels(probe, in.data.roots), s.training.resolved_fur_px, s.gabor_scales);
         most_scales = std::max(most_scales, o.gabor_scales);
       }
       views.push_back(fur::make_fur_view(c.gpu, c.scene, v, nonbald ? &*nonbald : nullptr, in.bald, o, store ? &native : nullptr));
@@ -648,6 +654,8 @@ const SettingsSchema<FurSettings>& fur_settings() {
               "the groom kept: auto (0-step, warm-up or trained, a later one where the held-out views and M_NeuS say it helped), trained, or warm (the warm-up's)")
         .text("truth", [](F& f) -> auto& { return f.truth; }, {"none", "knowledge", "all"},
               "synth scenes: train on the true knowledge (knowledge) or the true bald body, knowledge and roots (all), to measure what the earlier stages' errors cost")
+        .text("orientation_target", [](F& f) -> auto& { return f.orientation_target; }, {"gabor", "truth"},
+              "what the orientation loss and the held-out scores compare against: the photos' Gabor maps, or (synth scenes made with --true-orientation) the strands' true orientation, to measure what a perfect orientation map would buy")
         .check([](const F& f) { f.training.validate(); });
     return s;
   }();

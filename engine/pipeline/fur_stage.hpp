@@ -55,6 +55,9 @@ struct FurSettings {
   // errors cost: "knowledge" (the true lengths and directions on the pipeline's M_bald), "all" (the
   // true bald body, knowledge and roots; its baseline groom is the baseline (b)).
   std::string truth = "none";
+  // The orientation target: "gabor" (the photos' Gabor maps) or, on synth scenes written with
+  // --true-orientation, "truth" (gt/orientation/: what a perfect orientation map would buy).
+  std::string orientation_target = "gabor";
   // Which groom is kept (fur_selection.hpp): "auto" the 0-step, warm-up or trained groom, a later
   // one only where the held-out views and M_NeuS say it helped (and training stops after the
   // warm-up where no photo resolves the fur); "trained" always; "warm" the warm-up's.

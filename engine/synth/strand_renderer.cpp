@@ -9,6 +9,7 @@
 #include "engine/core/error.hpp"
 #include "engine/core/parallel.hpp"
 #include "engine/geometry/point_index.hpp"
+#include "engine/orient/gabor_bank.hpp"
 
 namespace nf::synth {
 
@@ -50,12 +51,19 @@ struct StrandRenderer::Impl {
     if (device) rtcReleaseDevice(device);
   }
 
-  glm::vec3 shade_hair(const RTCRayHit& hit, glm::vec3 view) const {
+  // The unit tangent of the strand segment a hit lies on.
+  glm::vec3 hair_tangent(const RTCRayHit& hit) const {
     const std::uint32_t segments = points_per_strand - 1;
     const std::uint32_t strand = hit.hit.primID / segments, k = hit.hit.primID % segments;
     const glm::vec4 a = curve_points[strand * points_per_strand + k], b = curve_points[strand * points_per_strand + k + 1];
-    glm::vec3 t = glm::vec3(b) - glm::vec3(a);
-    t = glm::length(t) > 0 ? glm::normalize(t) : glm::vec3(0, 1, 0);
+    const glm::vec3 t = glm::vec3(b) - glm::vec3(a);
+    return glm::length(t) > 0 ? glm::normalize(t) : glm::vec3(0, 1, 0);
+  }
+
+  glm::vec3 shade_hair(const RTCRayHit& hit, glm::vec3 view) const {
+    const std::uint32_t segments = points_per_strand - 1;
+    const std::uint32_t strand = hit.hit.primID / segments, k = hit.hit.primID % segments;
+    const glm::vec3 t = hair_tangent(hit);
     const float along = (float(k) + hit.hit.u) / float(segments);
     const glm::vec3 base = strand_colors.empty() ? glm::vec3(0.5f) : strand_colors[strand];
     // Roots sit in the coat's shadow; tips catch the light.
@@ -190,6 +198,8 @@ Rendered StrandRenderer::render(const io::Camera& camera) const {
   Rendered out;
   out.rgb = {w, h, 3, std::vector<float>(std::size_t(w) * h * 3)};
   out.coverage = {w, h, 1, std::vector<float>(std::size_t(w) * h)};
+  const bool orient = m.options.true_orientation;
+  if (orient) out.orientation = {w, h, 2, std::vector<float>(std::size_t(w) * h * 2)};
   const glm::dmat4& c2w = camera.camera_to_world;
   const glm::vec3 origin(c2w[3]);
   const glm::mat3 rot(c2w);
@@ -199,6 +209,7 @@ Rendered StrandRenderer::render(const io::Camera& camera) const {
     for (std::size_t y = y0; y < y1; ++y)
       for (std::uint32_t x = 0; x < w; ++x) {
         glm::vec3 sum(0);
+        glm::dvec2 doubled(0);  // the strand samples' doubled-angle vectors, summed
         std::uint32_t hits = 0;
         const std::uint32_t pixel = std::uint32_t(y) * w + x;
         for (std::uint32_t sy = 0; sy < s; ++sy)
@@ -221,10 +232,25 @@ Rendered StrandRenderer::render(const io::Camera& camera) const {
             }
             ++hits;
             sum += rh.hit.geomID == kStrandGeometry ? m.shade_hair(rh, -dir) : m.shade_body(rh, -dir);
+            if (orient && rh.hit.geomID == kStrandGeometry) {
+              // The tangent's direction on screen: the hit and a point a little along the strand, projected.
+              const glm::dvec3 at = glm::dvec3(origin) + double(rh.ray.tfar) * glm::dvec3(dir);
+              const glm::dvec3 a = camera.project(at), b = camera.project(at + 1e-3 * double(rh.ray.tfar) * glm::dvec3(m.hair_tangent(rh)));
+              if (b.x != a.x || b.y != a.y) {
+                const double theta = orient::orientation_of_direction(b.x - a.x, b.y - a.y);
+                doubled += glm::dvec2(std::cos(2 * theta), std::sin(2 * theta));
+              }
+            }
           }
         const float inv = 1.0f / float(s * s);
         for (int c = 0; c < 3; ++c) out.rgb.pixels[3 * std::size_t(pixel) + c] = srgb_encode(sum[c] * inv);
         out.coverage.pixels[pixel] = float(hits) * inv;
+        if (orient) {
+          double theta = 0.5 * std::atan2(doubled.y, doubled.x);
+          if (theta < 0) theta += orient::kPi;
+          out.orientation.pixels[2 * std::size_t(pixel)] = float(theta);
+          out.orientation.pixels[2 * std::size_t(pixel) + 1] = float(glm::length(doubled) * inv);
+        }
       }
   });
   return out;

@@ -30,6 +30,7 @@ struct RenderOptions {
   HairShading shading = HairShading::KajiyaKay;
   glm::vec3 background{0.05f, 0.05f, 0.06f};  // linear RGB
   std::uint32_t render_points = 34;     // points per strand traced (resampled from the strand's own)
+  bool true_orientation = false;        // also return Rendered::orientation
 };
 
 struct StrandLook {
@@ -44,6 +45,12 @@ struct BodyLook {
 struct Rendered {
   io::Image rgb;       // sRGB-encoded, 3 channels
   io::Image coverage;  // fraction of samples that hit the animal, 1 channel
+  // With RenderOptions::true_orientation, 2 channels: the on-screen orientation of the strands the
+  // samples see first (radians in [0, pi), engine/orient's convention: what a perfect orientation
+  // map of the photo would hold) and its weight, the length of the samples' mean doubled-angle
+  // vector: 1 where every sample sees a strand and they agree, less at the body, the background,
+  // crossings and the outline. The reference Gabor maps are judged against.
+  io::Image orientation;
 };
 
 // The body may be empty (no triangles): then only the strands are traced.

@@ -145,6 +145,8 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
   RenderOptions render_options;
   render_options.samples_per_axis = o.samples_per_axis;
   render_options.shading = hair_shading_from(o.shading);
+  render_options.true_orientation = o.true_orientation;
+  if (o.true_orientation) fs::create_directories(out / "gt" / "orientation");
   const StrandRenderer renderer(bald, body_look, fur.strands, look, render_options);
   timings["render_setup_s"] = clock.lap();
   Progress progress("synth render", scene.cameras.size());
@@ -165,6 +167,7 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
     for (float c : mask.pixels) coverage_sum += c;
     io::write_png(cam.image, r.rgb);
     io::write_png(cam.mask, mask);
+    if (o.true_orientation) io::write_exr(out / "gt" / "orientation" / (cam.name + ".exr"), r.orientation);
     progress.update(i + 1);
   }
   progress.finish();
@@ -209,7 +212,7 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
                  {"voxel", envelope.voxel * frame.scale}, {"closing_radius", envelope.closing_radius * frame.scale},
                  {"vertices", envelope.mesh.vertex_count()}}},
       {"render", {{"views", o.views}, {"resolution", o.resolution}, {"samples_per_pixel", o.samples_per_axis * o.samples_per_axis},
-                  {"shading", o.shading}, {"hair_width", o.hair_width}, {"photo_noise", o.photo_noise},
+                  {"shading", o.shading}, {"hair_width", o.hair_width}, {"photo_noise", o.photo_noise}, {"true_orientation", o.true_orientation},
                   {"mean_mask_coverage", coverage_sum / (double(o.views) * o.resolution * o.resolution)}}},
   };
   timings["write_s"] = clock.lap();

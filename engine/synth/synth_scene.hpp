@@ -5,7 +5,8 @@
 //   gt/strands.hair (scene units = metres), gt/bald.ply (region per vertex), gt/outer.ply (the fur
 //   envelope, see fur_envelope.hpp), gt/knowledge.json (the preset it grew from, with the true eye
 //   distance and each region's effective thickness, see effective_thickness.hpp), gt/scene.json (cm per unit, eye centres,
-//   body parameters, how outer.ply was made, timings), gt/body.glb (the bald body, for viewing).
+//   body parameters, how outer.ply was made, timings), gt/body.glb (the bald body, for viewing), and
+//   with true_orientation gt/orientation/NNN.exr.
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -34,6 +35,9 @@ struct SynthOptions {
   float hair_width = 1;
   float photo_noise = 0;
   bool overwrite = false;              // replace an existing synth output folder
+  // Also write gt/orientation/<camera>.exr: the true on-screen orientation of the strands each pixel
+  // shows (strand_renderer.hpp), the reference `nf_gpu orient` judges Gabor maps against.
+  bool true_orientation = false;
 };
 
 // Returns the gt/scene.json content. Refuses (UsageError) to write into an existing folder unless

@@ -220,6 +220,20 @@ TEST_CASE("nf_gpu synth, orient and render chain on a tiny scene; bad views exit
   CHECK(std::filesystem::exists(dir / "orient" / "001.exr"));
   CHECK(std::filesystem::exists(dir / "orient" / "001.png"));
   CHECK(run("orient --scene " + scene + " --out " + (dir / "orient").string() + " --views 7").code == 2);
+  CHECK(!std::filesystem::exists(dir / "orient" / "truth_agreement.json"));  // no true orientation in this scene
+  // With the true orientation written, orient scores its maps against it.
+  const std::string truthful = (dir / "truthful").string();
+  REQUIRE(run("synth --animal fox --views 2 --res 192 --strands 60000 --spp-axis 2 --true-orientation --out " + truthful).code == 0);
+  CHECK(std::filesystem::exists(dir / "truthful" / "gt" / "orientation" / "000.exr"));
+  const Result t = run("orient --scene " + truthful + " --out " + (dir / "orient_truth").string());
+  REQUIRE(t.code == 0);
+  CHECK(t.output.find("median err") != std::string::npos);
+  const nf::json agreement = nf::json::parse(slurp(dir / "orient_truth" / "truth_agreement.json"));
+  REQUIRE(agreement["views"].size() == 2);
+  for (const nf::json& v : agreement["views"]) {
+    CHECK(v["pixels"].get<int>() > 0);
+    CHECK(v["median_error_deg"].get<double>() < 45.0);  // better than chance (45 degrees)
+  }
   const Result r = run("render --strands " + scene + "/gt/strands.hair --mesh " + scene + "/gt/bald.ply --scene " + scene +
                        " --views 1 --spp-axis 1 --out " + (dir / "render").string());
   CHECK(r.code == 0);

@@ -155,6 +155,41 @@ TEST_CASE("the renderer's coverage matches analytic areas") {
   CHECK(covered == doctest::Approx(length_px * width_px + 3.14159265 * width_px * width_px / 4).epsilon(0.05));
 }
 
+TEST_CASE("the true orientation map reads each strand's direction on screen, agreed where a strand covers the pixel") {
+  io::Camera cam;
+  cam.name = "front";
+  cam.width = cam.height = 200;
+  cam.fx = cam.fy = 400, cam.cx = cam.cy = 100;
+  cam.camera_to_world = glm::translate(glm::dmat4(1.0), glm::dvec3(0, 0, 2));  // looks down -z at the origin
+  // A horizontal strand at y = 0.0525 (on screen: 0 degrees, rows 85.5-93.5) and one along (1, 1) through (0.05, -0.05)
+  // (up and to the right on screen: 45 degrees).
+  std::vector<float> xyz;
+  for (int k = 0; k < 100; ++k) xyz.insert(xyz.end(), {-0.1f + 0.2f * k / 99.0f, 0.0525f, 0.0f});
+  for (int k = 0; k < 100; ++k) xyz.insert(xyz.end(), {0.1f * k / 99.0f, -0.1f + 0.1f * k / 99.0f, 0.0f});
+  const io::StrandSet strands = io::StrandSet::uniform(2, 100, xyz);
+  synth::StrandLook look;
+  look.radius = 0.02f;  // 8 px wide
+  synth::RenderOptions options;
+  CHECK(synth::StrandRenderer(geometry::Mesh{}, {}, strands, look, options).render(cam).orientation.pixels.empty());
+  options.true_orientation = true;
+  const synth::Rendered r = synth::StrandRenderer(geometry::Mesh{}, {}, strands, look, options).render(cam);
+  REQUIRE(r.orientation.channels == 2);
+  REQUIRE(r.orientation.width == 200);
+  const auto angle_deg = [&](std::uint32_t x, std::uint32_t y) { return r.orientation.at(x, y, 0) * 180.0 / 3.14159265358979; };
+  const auto weight = [&](std::uint32_t x, std::uint32_t y) { return r.orientation.at(x, y, 1); };
+  const double horizontal = angle_deg(100, 89);  // the horizontal strand's centre line
+  CHECK(std::min(horizontal, 180 - horizontal) < 0.5);
+  CHECK(weight(100, 89) == doctest::Approx(1.0).epsilon(1e-3));
+  CHECK(angle_deg(110, 110) == doctest::Approx(45.0).epsilon(0.01));  // the diagonal one
+  CHECK(weight(110, 110) == doctest::Approx(1.0).epsilon(1e-3));
+  CHECK(weight(100, 150) == 0.0f);  // background
+  // At the strand's edge (row 85, half covered) only some samples see it: the weight is that share.
+  const float edge = weight(100, 85);
+  CHECK(edge > 0.0f);
+  CHECK(edge < 1.0f);
+  CHECK(edge == doctest::Approx(r.coverage.at(100, 85, 0)).epsilon(1e-4));
+}
+
 TEST_CASE("a written synthetic scene: files, ground truth, and roots inside the masks through every camera reader") {
   const fs::path root = fs::temp_directory_path() / "nf_synth_test";
   fs::remove_all(root);
