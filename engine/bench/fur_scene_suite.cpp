@@ -34,8 +34,8 @@ std::vector<std::string> env_list(const char* name, std::vector<std::string> fal
 }
 
 // The knowledge a user could have been given wrong: the scene's true knowledge with every
-// region's growth direction turned by kTurnDegrees about the animal's left-right axis (more
-// downwards for hair that lies towards the tail). What the photos buy when the knowledge is wrong.
+// region's growth direction turned by kTurnDegrees about the animal's left-right axis (hair that
+// lies towards the tail then rises off the back). What the photos buy when the knowledge is wrong.
 constexpr float kTurnDegrees = 60;
 fs::path turned_knowledge_file(const fs::path& scene) { return scene.parent_path() / (scene.filename().string() + "-knowledge-turned.json"); }
 

@@ -18,7 +18,11 @@ GroomChoice choose_groom(const GroomSignals& warm, const GroomSignals& trained, 
   char why[300];
   const bool held = warm.held_out && trained.held_out;
   const double env_w = warm.envelope_mm(), env_t = trained.envelope_mm();
-  if (env_t > env_w * (1 + tol.envelope) + 1e-9) {
+  // Relative changes, so that the two signals trade on one scale: the share of the envelope chamfer
+  // added and the share of the held-out orientation error removed.
+  const double env_loss = env_w > 0 ? env_t / env_w - 1 : 0;
+  const double orientation_gain = held && warm.orientation_error_deg > 0 ? 1 - trained.orientation_error_deg / warm.orientation_error_deg : 0;
+  if (env_loss > tol.envelope + 1e-9 && !(orientation_gain > env_loss)) {
     std::snprintf(why, sizeof why, "the image steps moved the tips off M_NeuS (chamfer %.2f mm against %.2f)", env_t, env_w);
     return {false, why};
   }
@@ -36,8 +40,9 @@ GroomChoice choose_groom(const GroomSignals& warm, const GroomSignals& trained, 
                                trained.orientation_error_deg < warm.orientation_error_deg - tol.orientation_deg));
   if (!gains) return {false, "the image steps gained on no signal beyond its tolerance"};
   if (held)
-    std::snprintf(why, sizeof why, "held-out IoU %.3f (against %.3f), orientation %.2f deg (%.2f), M_NeuS chamfer %.2f mm (%.2f)",
-                  trained.silhouette_iou, warm.silhouette_iou, trained.orientation_error_deg, warm.orientation_error_deg, env_t, env_w);
+    std::snprintf(why, sizeof why, "held-out IoU %.3f (against %.3f), orientation %.2f deg (%.2f), M_NeuS chamfer %.2f mm (%.2f)%s",
+                  trained.silhouette_iou, warm.silhouette_iou, trained.orientation_error_deg, warm.orientation_error_deg, env_t, env_w,
+                  env_loss > tol.envelope + 1e-9 ? ": the orientation's gain outweighs the chamfer's loss" : "");
   else
     std::snprintf(why, sizeof why, "M_NeuS chamfer %.2f mm (against %.2f); no held-out view", env_t, env_w);
   return {true, why};

@@ -43,7 +43,7 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 3;  // 2: fur/roots.npz when the groom has roots of its own; 3: selection, length factors
+constexpr int kStageVersion = 4;  // 2: fur/roots.npz when the groom has roots of its own; 3: selection, length factors; 4: the selection trades held-out orientation against the envelope
 
 FurSettings settings_of(const StageContext& c) { return fur_settings().resolve(c.quality, c.settings.value("fur", json::object())); }
 

@@ -27,6 +27,13 @@ TEST_CASE("fur selection: the trained groom is kept only where the held-out view
     CHECK_FALSE(c.trained);
     CHECK(c.reason.find("off M_NeuS") != std::string::npos);
   }
+  SUBCASE("a larger share gained on the held-out orientation than lost at M_NeuS (a wrong direction corrected): trained") {
+    const GroomChoice c = choose_groom(warm, signals(0.795, 30.0, 4.5, 7.3));  // orientation 25 % better, chamfer 18 % worse
+    CHECK(c.trained);
+    CHECK(c.reason.find("outweighs") != std::string::npos);
+    CHECK_FALSE(choose_groom(warm, signals(0.795, 36.0, 4.5, 7.3)).trained);  // 10 % better against 18 % worse
+    CHECK_FALSE(choose_groom(warm, signals(0.795, 30.0, 4.5, 7.3, false)).trained);  // no held-out view to weigh it
+  }
   SUBCASE("the silhouette got worse: warm") {
     const GroomChoice c = choose_groom(warm, signals(0.78, 36.0, 3.0, 5.0));
     CHECK_FALSE(c.trained);
