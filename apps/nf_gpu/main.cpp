@@ -165,7 +165,8 @@ int run_synth(const std::string& out, const nf::synth::SynthOptions& options) {
 int run_orient(const nf::orient::SceneOrientationOptions& options) {
   nf::gpu::Context context;
   const nf::orient::SceneOrientations result = nf::orient::write_scene_orientations(context, options);
-  std::printf("orient: %zu views -> %s\n", (result.files.size() - (result.truth.empty() ? 0 : 1)) / 2, options.out.string().c_str());
+  const auto views = std::count_if(result.files.begin(), result.files.end(), [](const auto& f) { return f.extension() == ".exr"; });
+  std::printf("orient: %zu views -> %s\n", std::size_t(views), options.out.string().c_str());
   if (!result.truth.empty()) {
     // Against the true orientation: the figures the fur stage's orientation loss lives on.
     std::printf("%-10s %9s %12s %10s %14s %12s\n", "camera", "pixels", "median err", "reliable", "err reliable", "weighted err");

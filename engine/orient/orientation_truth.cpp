@@ -4,22 +4,11 @@
 #include <string>
 
 #include "engine/core/error.hpp"
+#include "engine/core/stats.hpp"
 #include "engine/orient/gabor_bank.hpp"
 #include "engine/orient/orientation_scales.hpp"
 
 namespace nf::orient {
-namespace {
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  const std::size_t mid = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(mid), v.end());
-  double m = v[mid];
-  if (v.size() % 2 == 0) m = 0.5 * (m + *std::max_element(v.begin(), v.begin() + std::ptrdiff_t(mid)));
-  return m;
-}
-
-}  // namespace
 
 TruthAgreement agreement_with_truth(const OrientationMap& map, const std::vector<float>& reliability, const OrientationMap& truth,
                                     const std::vector<std::uint8_t>& mask, const TruthOptions& o) {

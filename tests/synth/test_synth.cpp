@@ -56,6 +56,16 @@ double fraction_in_masks(const io::Scene& scene, const std::vector<glm::vec3>& p
   return double(inside) / double(total);
 }
 
+// 200 x 200 pixels, focal length 400 px, 2 units in front of the origin looking down -z at it.
+io::Camera front_camera() {
+  io::Camera cam;
+  cam.name = "front";
+  cam.width = cam.height = 200;
+  cam.fx = cam.fy = 400, cam.cx = cam.cy = 100;
+  cam.camera_to_world = glm::translate(glm::dmat4(1.0), glm::dvec3(0, 0, 2));
+  return cam;
+}
+
 }  // namespace
 
 TEST_CASE("fur grows as the knowledge says: lengths per region, nothing on bald regions, outside the skin") {
@@ -114,11 +124,7 @@ TEST_CASE("fur grows as the knowledge says: lengths per region, nothing on bald 
 }
 
 TEST_CASE("the renderer's coverage matches analytic areas") {
-  io::Camera cam;
-  cam.name = "front";
-  cam.width = cam.height = 200;
-  cam.fx = cam.fy = 400, cam.cx = cam.cy = 100;
-  cam.camera_to_world = glm::translate(glm::dmat4(1.0), glm::dvec3(0, 0, 2));  // looks down -z at the origin
+  const io::Camera cam = front_camera();
 
   // A sphere of radius 0.25 at the origin: its silhouette is a disc of radius f r / sqrt(d^2 - r^2).
   const int n = 64;
@@ -156,11 +162,7 @@ TEST_CASE("the renderer's coverage matches analytic areas") {
 }
 
 TEST_CASE("the true orientation map reads each strand's direction on screen, agreed where a strand covers the pixel") {
-  io::Camera cam;
-  cam.name = "front";
-  cam.width = cam.height = 200;
-  cam.fx = cam.fy = 400, cam.cx = cam.cy = 100;
-  cam.camera_to_world = glm::translate(glm::dmat4(1.0), glm::dvec3(0, 0, 2));  // looks down -z at the origin
+  const io::Camera cam = front_camera();
   // A horizontal strand at y = 0.0525 (on screen: 0 degrees, rows 85.5-93.5) and one along (1, 1) through (0.05, -0.05)
   // (up and to the right on screen: 45 degrees).
   std::vector<float> xyz;
