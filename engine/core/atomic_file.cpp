@@ -1,6 +1,5 @@
 #include "engine/core/atomic_file.hpp"
 
-#include <signal.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -10,6 +9,7 @@
 #include <random>
 
 #include "engine/core/error.hpp"
+#include "engine/core/host.hpp"
 
 namespace nf {
 
@@ -18,15 +18,6 @@ namespace {
 constexpr std::string_view kTemporaryMark = ".tmp";
 // A temporary of another host (a shared disk) is only judged by its age: its pid means nothing here.
 constexpr auto kForeignTemporaryAge = std::chrono::hours(24);
-
-std::string host_name() {
-  char name[256] = {};
-  if (gethostname(name, sizeof name - 1) != 0) return "localhost";
-  std::string host(name);
-  for (char& ch : host)
-    if (ch == '/' || ch == '@') ch = '_';
-  return host;
-}
 
 // Why the last write failed, in words (a stream keeps no error of its own; errno is the system's).
 std::string write_failure(int error) {
@@ -72,8 +63,11 @@ void write_file_atomic(const std::filesystem::path& path, const std::function<vo
       out.close();
       if (!out) throw InputError("writing '" + path.string() + "' failed: " + write_failure(errno) + "; nothing was left in its place");
     }
+    // On a file server a rename can reach the disk before the data it names: sync both.
+    sync_file(tmp);
     fs::rename(tmp, path, ec);
     if (ec) throw InputError("cannot move '" + tmp.string() + "' to '" + path.string() + "': " + ec.message());
+    sync_folder(dir);
   } catch (...) {
     fs::remove(tmp, ec);
     throw;
@@ -103,7 +97,7 @@ std::vector<std::string> remove_stale_temporaries(const std::filesystem::path& d
       if (ec || age < kForeignTemporaryAge) continue;
     } else {
       const pid_t pid = pid_t(std::stol(pid_text));
-      if (pid == getpid() || kill(pid, 0) == 0 || errno != ESRCH) continue;  // its writer may still be at work
+      if (pid == getpid() || process_alive(pid)) continue;  // its writer may still be at work
     }
     if (fs::remove(e.path(), ec)) removed.push_back(name);
   }

@@ -2,13 +2,13 @@
 
 #include <algorithm>
 #include <chrono>
-#include <ctime>
 #include <new>
 #include <set>
 
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/content_hash.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/host.hpp"
 #include "engine/core/log.hpp"
 #include "engine/core/output_guard.hpp"
 #include "engine/core/text.hpp"
@@ -130,13 +130,6 @@ std::string memory_advice(const Stage& stage, const StageContext& c) {
   } catch (const std::bad_alloc&) {
     throw DeviceError(where + "out of host memory" + memory_advice(stage, c));
   }
-}
-
-std::string now_utc() {
-  const std::time_t t = std::time(nullptr);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
-  return buf;
 }
 
 // The stages' declared graph: names, and for each the indices of the stages it reads.
@@ -305,7 +298,7 @@ std::vector<StageOutcome> run_pipeline(const std::vector<std::unique_ptr<Stage>>
                                                    {"settings", stage.settings().values(c.quality, c.settings.value(name, json::object()))},
                                                    {"summary", outcome.summary},
                                                    {"seconds", outcome.seconds},
-                                                   {"finished", now_utc()}}
+                                                   {"finished", utc_now()}}
                                                   .dump(2) + "\n");
     // Swap: the previous result is removed only once the new one is complete.
     fs::remove_all(old);

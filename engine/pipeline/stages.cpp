@@ -13,6 +13,7 @@
 #include "engine/pipeline/fur_stage.hpp"
 #include "engine/pipeline/knowledge_stage.hpp"
 #include "engine/pipeline/neus_stage.hpp"
+#include "engine/pipeline/work_lock.hpp"
 
 namespace nf::pipeline {
 namespace fs = std::filesystem;
@@ -74,9 +75,14 @@ json check_reconstruct_options(const std::vector<std::unique_ptr<Stage>>& stages
   return settings;
 }
 
+json check_reconstruct_options(const ReconstructOptions& options) {
+  return check_reconstruct_options(reconstruction_stages(), options);
+}
+
 std::vector<StageOutcome> reconstruct(gpu::Context& context, const ReconstructOptions& options) {
   const auto stages = reconstruction_stages();
   json settings = check_reconstruct_options(stages, options);
+  const WorkLock lock(options.work, "nf_gpu reconstruct --scene " + options.scene.string());
   const fs::path scene_abs = fs::absolute(options.scene);
   const fs::path scene_dir = fs::is_directory(scene_abs) ? scene_abs : scene_abs.parent_path();
   StageContext c{context, scene_dir, io::read_scene(options.scene), options.work, options.quality, std::move(settings)};

@@ -24,6 +24,8 @@ struct ReconstructOptions {
 // own cross-checks), --out (not a file, not inside the scene folder). Returns the settings as
 // {"stage": {"key": value}}. UsageError (exit 2) or InputError (exit 1) name what is wrong.
 json check_reconstruct_options(const std::vector<std::unique_ptr<Stage>>& stages, const ReconstructOptions& options);
+// The same against reconstruct's own stages (what `nf_gpu batch` checks each scene with).
+json check_reconstruct_options(const ReconstructOptions& options);
 
 // check_reconstruct_options, then reads the scene (any format io::read_scene takes) and checks its
 // files (sizes, truncation) before any stage runs, then runs the stages.

@@ -1,0 +1,26 @@
+#pragma once
+// This machine and its processes, as the files shared between hosts name them (temporaries, locks).
+#include <sys/types.h>
+
+#include <filesystem>
+#include <string>
+
+namespace nf {
+
+// The host name, with '/' and '@' replaced so that it can go into a file name ("localhost" when the
+// system will not say).
+std::string host_name();
+
+// The time now as "2026-12-05T11:30:00Z" (UTC), for records people and other hosts read.
+std::string utc_now();
+
+// Whether a process of this host with this pid exists (a pid of another user's process counts).
+bool process_alive(pid_t pid);
+
+// Flushes a written file, then its folder's entry, to the disk (or the file server): what a rename
+// needs before it is trusted on a shared filesystem. Errors are ignored: the data is already written
+// and a filesystem without fsync (tmpfs, some FUSE) loses nothing by it.
+void sync_file(const std::filesystem::path& file);
+void sync_folder(const std::filesystem::path& folder);
+
+}  // namespace nf
