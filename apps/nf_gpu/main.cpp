@@ -8,6 +8,7 @@
 #include <optional>
 #include <set>
 
+#include "apps/nf_gpu/batch_command.hpp"
 #include "engine/bench/suites.hpp"
 #include "engine/body/quadruped.hpp"
 #include "engine/core/error.hpp"
@@ -545,6 +546,8 @@ int main(int argc, char** argv) {
   pose->add_flag("--json", pose_json, "print the record as JSON");
 
   // `nf_gpu help [COMMAND]` and a bare `nf_gpu` print the help, as most tools do.
+  const nf_cli::BatchCommand batch(app);
+
   auto* help = app.add_subcommand("help", "this help, or a command's: nf_gpu help COMMAND");
   std::string help_topic;
   help->add_option("command", help_topic, "a command");
@@ -621,6 +624,7 @@ int main(int argc, char** argv) {
       pose_options.work = pose_work, pose_options.out = pose_out, pose_options.groom = pose_groom;
       return run_pose(pose_options, pose_json);
     }
+    if (batch.parsed()) return batch.run();
     if (*render) {
       render_options.strands = render_strands, render_options.mesh = render_mesh;
       render_options.scene = render_scene, render_options.out = render_out;

@@ -1,0 +1,106 @@
+#include "engine/batch/slurm_backend.hpp"
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <sstream>
+
+#include "engine/core/atomic_file.hpp"
+#include "engine/core/error.hpp"
+#include "engine/core/host.hpp"
+
+namespace nf::batch {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// A word for a bash script, single-quoted.
+std::string shell_quote(const std::string& text) {
+  std::string out = "'";
+  for (char ch : text) out += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
+  return out + "'";
+}
+
+// "0-3" or "0,2,5": the --array list of these indices.
+std::string array_list(const std::vector<std::size_t>& indices) {
+  std::string out;
+  std::size_t i = 0;
+  while (i < indices.size()) {
+    std::size_t j = i;
+    while (j + 1 < indices.size() && indices[j + 1] == indices[j] + 1) ++j;
+    if (!out.empty()) out += ',';
+    out += std::to_string(indices[i]);
+    if (j > i) out += "-" + std::to_string(indices[j]);
+    i = j + 1;
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::size_t> tasks_to_submit(const BatchFolder& folder, bool rerun_done) {
+  std::vector<std::size_t> out;
+  const std::vector<BatchTask> tasks = folder.tasks();
+  for (std::size_t i = 0; i < tasks.size(); ++i)
+    if (rerun_done || folder.state(tasks[i].name).state != "done") out.push_back(i);
+  return out;
+}
+
+std::string sbatch_script(const BatchFolder& folder, const std::vector<std::size_t>& indices, const SlurmOptions& o) {
+  if (indices.empty()) return "";
+  const std::vector<BatchTask> tasks = folder.tasks();
+  const fs::path dir = fs::absolute(folder.dir());
+  std::ostringstream s;
+  s << "#!/bin/bash\n";
+  s << "# nf_gpu batch: one array task per scene (" << dir.string() << "/batch.json lists them by index)\n";
+  s << "#SBATCH --job-name=nf_gpu-" << dir.stem().string() << "\n";
+  s << "#SBATCH --array=" << array_list(indices);
+  if (o.max_parallel > 0) s << "%" << o.max_parallel;
+  s << "\n";
+  s << "#SBATCH --requeue\n";
+  // B: the batch shell, which execs nf_gpu: the stages get the signal and save their checkpoints.
+  s << "#SBATCH --signal=B:TERM@" << o.signal_seconds << "\n";
+  s << "#SBATCH --open-mode=append\n";
+  s << "#SBATCH --output=" << (dir / "logs" / "slurm-%A_%a.out").string() << "\n";
+  s << "#SBATCH --ntasks=1\n";
+  if (!o.partition.empty()) s << "#SBATCH --partition=" << o.partition << "\n";
+  if (!o.account.empty()) s << "#SBATCH --account=" << o.account << "\n";
+  if (!o.time.empty()) s << "#SBATCH --time=" << o.time << "\n";
+  if (!o.mem.empty()) s << "#SBATCH --mem=" << o.mem << "\n";
+  if (o.gpus_per_task > 0) s << "#SBATCH --gres=gpu:" << o.gpus_per_task << "\n";
+  if (o.cpus_per_task > 0) s << "#SBATCH --cpus-per-task=" << o.cpus_per_task << "\n";
+  for (const std::string& e : o.extra) s << "#SBATCH " << e << "\n";
+  s << "\n# the task's scene, by its array index\nnames=(";
+  for (std::size_t i = 0; i < tasks.size(); ++i) s << (i ? " " : "") << shell_quote(tasks[i].name);
+  s << ")\n";
+  s << "exec " << shell_quote(folder.nf_gpu().string()) << " batch task " << shell_quote(dir.string())
+    << " --name \"${names[$SLURM_ARRAY_TASK_ID]}\" --max-requeues " << o.max_requeues << "\n";
+  return s.str();
+}
+
+std::string submit(const BatchFolder& folder, const std::string& script, std::size_t tasks) {
+  write_file_atomic(folder.sbatch_script(), script);
+  const std::string command = "sbatch --parsable " + shell_quote(folder.sbatch_script().string()) + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) throw InputError("cannot run sbatch: is Slurm installed here (`sbatch` on PATH)?");
+  std::string out;
+  std::array<char, 256> buf{};
+  while (std::fgets(buf.data(), int(buf.size()), pipe)) out += buf.data();
+  const int status = pclose(pipe);
+  while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
+  if (status != 0 || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    if (WIFEXITED(status) && WEXITSTATUS(status) == 127) throw InputError("sbatch was not found: is Slurm installed here?");
+    throw InputError("sbatch refused the job (" + folder.sbatch_script().string() + "): " + out);
+  }
+  // --parsable prints "jobid" or "jobid;cluster".
+  const std::string job = out.substr(0, out.find(';'));
+  if (job.empty() || job.find_first_not_of("0123456789") != std::string::npos)
+    throw InputError("sbatch answered '" + out + "' where a job id was expected");
+  folder.add_submission({{"job", job}, {"tasks", tasks}, {"submitted", utc_now()}, {"host", host_name()}});
+  return job;
+}
+
+}  // namespace nf::batch

@@ -1,0 +1,33 @@
+#pragma once
+// `nf_gpu batch run --backend slurm`: one sbatch job array, a task per scene. Each array task execs
+// `nf_gpu batch task` (so Slurm's batch-shell signal reaches the stages), is requeueable, and gets
+// SIGTERM `signal_seconds` before its time limit, time enough to save a checkpoint; the task
+// requeues itself when a rerun can finish it (task_run.hpp).
+#include <string>
+#include <vector>
+
+#include "engine/batch/batch_folder.hpp"
+
+namespace nf::batch {
+
+struct SlurmOptions {
+  std::string partition, account, time, mem;  // "" = the cluster's default
+  int gpus_per_task = 0;                      // --gres=gpu:N
+  int cpus_per_task = 0;
+  int max_parallel = 0;                       // %N on the array: tasks at once (0: no limit)
+  int signal_seconds = 120;                   // SIGTERM this long before the time limit
+  int max_requeues = 3;
+  bool rerun_done = false;
+  std::vector<std::string> extra;             // further #SBATCH lines, e.g. "--qos=low"
+};
+
+// The indices (into the batch's tasks) that are not done yet (all with rerun_done).
+std::vector<std::size_t> tasks_to_submit(const BatchFolder& folder, bool rerun_done);
+
+// The job script for those indices (empty: nothing to submit).
+std::string sbatch_script(const BatchFolder& folder, const std::vector<std::size_t>& indices, const SlurmOptions& options);
+
+// Writes the script, submits it with sbatch and records the job; returns the job id.
+std::string submit(const BatchFolder& folder, const std::string& script, std::size_t tasks);
+
+}  // namespace nf::batch
