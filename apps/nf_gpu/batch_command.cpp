@@ -90,6 +90,7 @@ int BatchCommand::run() const {
       // Nothing is written: the script as it would be for a fresh batch folder.
       const nf::batch::BatchFolder scratch(fs::temp_directory_path() / ("nf_gpu-dry-run-" + std::to_string(getpid())));
       scratch.write(tasks, v.manifest, nf::batch::self_executable());
+      if (o.job_name.empty()) o.job_name = "nf_gpu-" + fs::absolute(dir).filename().string();
       std::vector<std::size_t> all(tasks.size());
       for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
       std::string script = nf::batch::sbatch_script(scratch, all, o);

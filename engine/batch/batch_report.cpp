@@ -117,6 +117,9 @@ std::vector<SceneRow> scene_rows(const BatchFolder& folder) {
         for (const json& text : *w)
           if (text.is_string()) r.warnings.push_back(stage + ": " + text.get<std::string>());
     }
+    if (r.state == "running")
+      for (const std::string& stage : stages)
+        if (fs::exists(t.work / (stage + ".partial"))) r.stage_running = stage;
     const fs::path out = pipeline::export_outputs(t.work).dir;
     for (const char* preview : {"turntable.png", "compare_004.png"})
       if (fs::exists(out / preview)) r.previews.push_back((out / preview).string());
@@ -137,7 +140,7 @@ json rows_to_json(const std::vector<SceneRow>& rows) {
     json seconds = json::object();
     for (const auto& [stage, s] : r.stage_seconds) seconds[stage] = s;
     out.push_back({{"name", r.name}, {"state", r.state}, {"attempts", r.attempts}, {"stage_reached", r.stage_reached},
-                   {"seconds", seconds}, {"scores", r.scores}, {"warnings", r.warnings}, {"host", r.host}, {"job", r.job},
+                   {"stage_running", r.stage_running}, {"seconds", seconds}, {"scores", r.scores}, {"warnings", r.warnings}, {"host", r.host}, {"job", r.job},
                    {"message", r.message}, {"log", r.log}, {"previews", r.previews}});
   }
   return out;
@@ -156,6 +159,7 @@ std::string rows_to_text(const std::vector<SceneRow>& rows) {
     std::snprintf(line, sizeof line, "%-*s  %-9s %-9s %-4d ", int(width), r.name.c_str(), r.state.c_str(),
                   r.stage_reached.empty() ? "-" : r.stage_reached.c_str(), r.attempts);
     s << line << seconds_text(r);
+    if (!r.stage_running.empty()) s << (r.stage_seconds.empty() ? "" : " ") << "(" << r.stage_running << " running on " << r.host << ")";
     const std::string scores = score_text(r.scores);
     if (!scores.empty()) s << "; " << scores;
     s << "\n";

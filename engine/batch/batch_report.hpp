@@ -10,6 +10,7 @@ namespace nf::batch {
 
 struct SceneRow {
   std::string name, state, stage_reached, host, job, message, log;
+  std::string stage_running;  // the stage a running task is in ("" otherwise)
   int attempts = 0;
   std::vector<std::pair<std::string, double>> stage_seconds;  // the stages finished, in order
   json scores = json::object();                                // what the stages measured

@@ -56,7 +56,7 @@ std::string sbatch_script(const BatchFolder& folder, const std::vector<std::size
   std::ostringstream s;
   s << "#!/bin/bash\n";
   s << "# nf_gpu batch: one array task per scene (" << dir.string() << "/batch.json lists them by index)\n";
-  s << "#SBATCH --job-name=nf_gpu-" << dir.stem().string() << "\n";
+  s << "#SBATCH --job-name=" << (o.job_name.empty() ? "nf_gpu-" + dir.filename().string() : o.job_name) << "\n";
   s << "#SBATCH --array=" << array_list(indices);
   if (o.max_parallel > 0) s << "%" << o.max_parallel;
   s << "\n";

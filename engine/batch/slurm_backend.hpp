@@ -11,6 +11,7 @@
 namespace nf::batch {
 
 struct SlurmOptions {
+  std::string job_name;                        // "" = nf_gpu-<the batch folder's name>
   std::string partition, account, time, mem;  // "" = the cluster's default
   int gpus_per_task = 0;                      // --gres=gpu:N
   int cpus_per_task = 0;

@@ -140,7 +140,9 @@ int run_task(const BatchFolder& folder, const std::string& name, const TaskRunOp
     } else if (const std::string why = requeue(s.job); why.empty()) {
       s.state = "requeued";
     } else {
-      s.message += " (" + why + ")";
+      // Slurm refuses when it is requeueing the job already (scontrol requeue, preemption): then
+      // it runs again anyway.
+      s.message += " (" + why + "; a job Slurm requeued itself runs again)";
     }
   }
   folder.write_state(name, s);

@@ -166,6 +166,7 @@ TEST_CASE("the Slurm job script: an array of the tasks not done, requeueable, SI
   // exec: the batch shell becomes nf_gpu, so the B: signal reaches the stages; the path is quoted.
   CHECK(script.find("exec '/opt/nf gpu/nf_gpu' batch task '" + fs::absolute(folder.dir()).string() +
                     "' --name \"${names[$SLURM_ARRAY_TASK_ID]}\" --max-requeues 3\n") != std::string::npos);
+  CHECK(script.find("#SBATCH --job-name=nf_gpu-m.batch\n") != std::string::npos);
   CHECK(nf::batch::sbatch_script(folder, {}, o).empty());
 }
 
@@ -207,8 +208,18 @@ TEST_CASE("status rows: the stage reached, seconds and scores from the WORK reco
   b.host = nf::host_name();
   b.pid = dead_pid();
   folder.write_state("b", b);
-  const auto rows = nf::batch::scene_rows(folder);
+  auto rows = nf::batch::scene_rows(folder);
   REQUIRE(rows.size() == 2);
+  CHECK(rows[1].state == "lost");
+  // A live task shows the stage it is in.
+  b.pid = getpid();
+  folder.write_state("b", b);
+  fs::create_directories(dir / "wb" / "defur.partial");
+  CHECK(nf::batch::scene_rows(folder)[1].stage_running == "defur");
+  CHECK(nf::batch::rows_to_text(nf::batch::scene_rows(folder)).find("(defur running on " + nf::host_name() + ")") != std::string::npos);
+  b.pid = dead_pid();
+  folder.write_state("b", b);
+  rows = nf::batch::scene_rows(folder);
   CHECK(rows[0].stage_reached == "fur");  // stage order, not file order
   REQUIRE(rows[0].stage_seconds.size() == 3);
   CHECK(rows[0].stage_seconds[0] == std::pair<std::string, double>{"neus", 12.5});

@@ -2,7 +2,8 @@
 """The README's runnable examples, run as written, in order, so they cannot drift from the binary.
 
 Every `nf_gpu ...` line of the README's code blocks that holds no placeholder (WORK, DIR, [...],
-a|b) is run in a scratch folder where `build/demo-scene` and `my_cat` are a tiny synthetic cat.
+a|b) is run in a scratch folder where `build/demo-scene` and `my_cat` are a tiny synthetic cat, and
+`animals.json` is the README's batch manifest over copies of it.
 Commands that run stages get small settings appended (those the line does not set itself, and
 the step counts), so the README's own flags, setting names, joint and region names are what is
 checked, not its minutes of work. A line's
@@ -58,6 +59,27 @@ def examples(readme):
     return out
 
 
+def batch_manifest(readme, scratch, scene):
+    """The README's batch manifest (its JSON block with "scenes"), written to animals.json with the
+    small settings merged into its defaults, and each scene it names made a copy of `scene`."""
+    with open(readme, encoding="utf-8") as f:
+        blocks = re.findall(r"```json\n(.*?)```", f.read(), re.S)
+    manifests = [json.loads(b) for b in blocks if '"scenes"' in b]
+    if not manifests:
+        return
+    manifest = manifests[0]
+    settings = manifest.setdefault("defaults", {}).setdefault("settings", {})
+    for setting in TINY + STEPS:
+        key, value = setting.split("=")
+        if key not in settings or key in ("neus.steps", "fur.steps"):
+            settings[key] = value
+    for entry in manifest["scenes"]:
+        entry.get("settings", {}).pop("fur.steps", None)  # step counts only cost time
+        shutil.copytree(scene, os.path.join(scratch, entry["scene"]))
+    with open(os.path.join(scratch, "animals.json"), "w", encoding="utf-8") as f:
+        json.dump(manifest, f)
+
+
 def main():
     nf_gpu, readme = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
     found = examples(readme)
@@ -72,6 +94,7 @@ def main():
                  "--out", os.path.join(scratch, "build", "demo-scene")]
         subprocess.run(synth, check=True, capture_output=True)
         shutil.copytree(os.path.join(scratch, "build", "demo-scene"), os.path.join(scratch, "my_cat"))
+        batch_manifest(readme, scratch, os.path.join(scratch, "build", "demo-scene"))
         for number, command, comment in found:
             args = command.split()[1:]
             if args[0] in STAGE_COMMANDS:
