@@ -47,4 +47,13 @@ void sync_file(const std::filesystem::path& file) { sync_path(file, O_RDONLY); }
 
 void sync_folder(const std::filesystem::path& folder) { sync_path(folder, O_RDONLY | O_DIRECTORY); }
 
+void sync_tree(const std::filesystem::path& folder) {
+  std::error_code ec;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(folder, ec)) {
+    if (e.is_regular_file(ec)) sync_file(e.path());
+    else if (e.is_directory(ec)) sync_folder(e.path());
+  }
+  sync_folder(folder);
+}
+
 }  // namespace nf

@@ -22,5 +22,8 @@ bool process_alive(pid_t pid);
 // and a filesystem without fsync (tmpfs, some FUSE) loses nothing by it.
 void sync_file(const std::filesystem::path& file);
 void sync_folder(const std::filesystem::path& folder);
+// Every file and folder under `folder`, then the folder itself: before a finished output folder is
+// renamed into place (its writers include libraries that do not sync).
+void sync_tree(const std::filesystem::path& folder);
 
 }  // namespace nf

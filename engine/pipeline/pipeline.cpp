@@ -300,10 +300,13 @@ std::vector<StageOutcome> run_pipeline(const std::vector<std::unique_ptr<Stage>>
                                                    {"seconds", outcome.seconds},
                                                    {"finished", utc_now()}}
                                                   .dump(2) + "\n");
-    // Swap: the previous result is removed only once the new one is complete.
+    // Swap: the previous result is removed only once the new one is complete, and on disk (a
+    // file server may otherwise commit the renames before the data they name).
+    sync_tree(partial);
     fs::remove_all(old);
     if (fs::exists(dir)) fs::rename(dir, old);
     fs::rename(partial, dir);
+    sync_folder(c.work);
     fs::remove_all(old);
     fs::remove_all(resume);
     log::info("stage ", name, ": done in ", outcome.seconds, " s");
