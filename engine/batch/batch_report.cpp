@@ -103,7 +103,7 @@ std::vector<SceneRow> scene_rows(const BatchFolder& folder) {
     r.message = s.message;
     r.log = folder.log_file(t.name).string();
     // A task of this host whose process is gone never filed its end.
-    if (s.state == "running" && s.host == host_name() && !process_alive(pid_t(s.pid))) {
+    if (s.state == "running" && s.pid > 0 && s.host == host_name() && !process_alive(pid_t(s.pid))) {
       r.state = "lost";
       r.message = "its process " + std::to_string(s.pid) + " ended without filing its state; run the batch again to resume";
     }

@@ -121,6 +121,14 @@ LocalSummary run_local(const BatchFolder& folder, const LocalOptions& options) {
       }
       const std::string name = queue.front();
       queue.pop_front();
+      // Filed as running before the task files itself, so that a task dying before it could (or
+      // failing to start) is seen below.
+      TaskState starting = folder.state(name);
+      starting.state = "running";
+      starting.host = host_name();
+      starting.pid = 0;
+      starting.message.clear();
+      folder.write_state(name, starting);
       const pid_t pid = spawn_task(exe, folder, name, options, environment);
       g_children[slot].store(pid);
       busy[std::size_t(slot)] = true;

@@ -8,9 +8,11 @@
 
 #include <chrono>
 #include <cstdlib>
+#include <set>
 
 #include "engine/batch/batch_folder.hpp"
 #include "engine/batch/batch_report.hpp"
+#include "engine/batch/local_backend.hpp"
 #include "engine/batch/manifest.hpp"
 #include "engine/batch/slurm_backend.hpp"
 #include "engine/batch/task_run.hpp"
@@ -168,6 +170,54 @@ TEST_CASE("the Slurm job script: an array of the tasks not done, requeueable, SI
                     "' --name \"${names[$SLURM_ARRAY_TASK_ID]}\" --max-requeues 3\n") != std::string::npos);
   CHECK(script.find("#SBATCH --job-name=nf_gpu-m.batch\n") != std::string::npos);
   CHECK(nf::batch::sbatch_script(folder, {}, o).empty());
+}
+
+TEST_CASE("the local runner: a GPU per slot (NF_DEVICE), the cores shared on a CPU driver, done tasks skipped, a killed task filed") {
+  const fs::path dir = fresh("local");
+  for (const char* s : {"a", "b", "c", "d"}) fs::create_directories(dir / s);
+  spit(dir / "m.json", R"({"defaults": {"settings": {"knowledge.preset": "cat"}}, "scenes": [{"scene": "a"}, {"scene": "b"}, {"scene": "c"}, {"scene": "d"}]})");
+  // A stand-in for nf_gpu: `batch task DIR --name N ...` records its environment and files itself
+  // done, except the scene "d", which dies by SIGKILL before it can file anything.
+  const fs::path fake = dir / "fake_nf_gpu.sh";
+  spit(fake, "#!/bin/sh\n"
+             "name=$5\n"
+             "echo \"NF_DEVICE=${NF_DEVICE:-none} LP_NUM_THREADS=${LP_NUM_THREADS:-none}\" > \"$3/env-$name\"\n"
+             "sleep 0.3\n"
+             "[ \"$name\" = d ] && kill -9 $$\n"
+             "printf '{\"state\": \"done\", \"attempts\": 1}' > \"$3/tasks/$name.json\"\n");
+  fs::permissions(fake, fs::perms::owner_all);
+  const nf::batch::BatchFolder folder(dir / "m.batch");
+  folder.write(nf::batch::read_manifest(dir / "m.json"), dir / "m.json", fake);
+  nf::batch::TaskState done;
+  done.state = "done";
+  folder.write_state("c", done);
+
+  nf::batch::LocalOptions gpus;
+  gpus.devices = {"3", "5"};
+  const auto summary = nf::batch::run_local(folder, gpus);
+  CHECK(summary.done == 2);
+  CHECK(summary.stopped == 1);
+  CHECK(summary.skipped == 1);
+  CHECK(summary.exit_code == 1);
+  CHECK_FALSE(fs::exists(folder.dir() / "env-c"));  // done already
+  // Two slots, one GPU each: a and b started together on devices 3 and 5, d took a freed slot.
+  std::set<std::string> seen;
+  for (const char* s : {"a", "b", "d"}) seen.insert(slurp(folder.dir() / (std::string("env-") + s)));
+  CHECK(seen.count("NF_DEVICE=3 LP_NUM_THREADS=none\n") == 1);
+  CHECK(seen.count("NF_DEVICE=5 LP_NUM_THREADS=none\n") == 1);
+  const nf::batch::TaskState killed = folder.state("d");
+  CHECK(killed.state == "stopped");
+  CHECK(killed.exit_code == 128 + 9);
+  CHECK(killed.message.find("killed by signal 9") != std::string::npos);
+
+  // No GPU: N slots share the cores.
+  nf::batch::LocalOptions cpu;
+  cpu.jobs = 2;
+  cpu.cores = 8;
+  cpu.rerun_done = true;
+  (void)nf::batch::run_local(folder, cpu);
+  CHECK(slurp(folder.dir() / "env-a") == "NF_DEVICE=none LP_NUM_THREADS=4\n");
+  CHECK(slurp(folder.dir() / "env-c") == "NF_DEVICE=none LP_NUM_THREADS=4\n");
 }
 
 TEST_CASE("a task's exit is filed as done, failed (a rerun cannot fix it) or stopped (a rerun resumes)") {
