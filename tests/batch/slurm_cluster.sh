@@ -1,7 +1,7 @@
 #!/bin/bash
 # A one-node Slurm cluster in a folder, for the batch tests: munged, slurmctld and slurmd of
 # Debian's munge and slurm-wlm (tools/debian-packages.txt), on their own socket, ports and state,
-# cgroups off (process tracking by /proc). Runs as root, as CI does.
+# cgroups off (process tracking by /proc). The daemons run as the calling user (root in CI).
 #   slurm_cluster.sh start DIR   prints the SLURM_CONF to export; waits until the node is idle
 #   slurm_cluster.sh stop DIR    stops the daemons and their jobs
 set -euo pipefail
@@ -55,8 +55,8 @@ SlurmdPort=$d_port
 AuthType=auth/munge
 AuthInfo=socket=$dir/munge/munge.socket
 CredType=cred/munge
-SlurmUser=root
-SlurmdUser=root
+SlurmUser=$(id -un)
+SlurmdUser=$(id -un)
 StateSaveLocation=$dir/state
 SlurmdSpoolDir=$dir/spool
 SlurmctldPidFile=$dir/slurmctld.pid
