@@ -90,7 +90,13 @@ LocalSummary run_local(const BatchFolder& folder, const LocalOptions& options) {
   LocalSummary summary;
   std::deque<std::string> queue;
   for (const BatchTask& t : tasks) {
-    if (!options.rerun_done && folder.state(t.name).state == "done") {
+    const TaskState s = folder.state(t.name);
+    if (!options.rerun_done && s.state == "done") {
+      ++summary.skipped;
+      continue;
+    }
+    if (s.state == "running" && s.pid > 0 && s.host == host_name() && process_alive(pid_t(s.pid))) {
+      std::printf("batch: '%s' is running already (pid %ld): left to it\n", t.name.c_str(), s.pid);
       ++summary.skipped;
       continue;
     }

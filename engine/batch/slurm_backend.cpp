@@ -41,11 +41,26 @@ std::string array_list(const std::vector<std::size_t>& indices) {
 
 }  // namespace
 
+bool job_in_queue(const std::string& job) {
+  if (job.empty() || job.find_first_not_of("0123456789_") != std::string::npos) return false;
+  FILE* pipe = popen(("squeue -h -o %i -j " + job + " 2>/dev/null").c_str(), "r");
+  if (!pipe) return false;
+  std::array<char, 128> buf{};
+  const bool listed = std::fgets(buf.data(), int(buf.size()), pipe) != nullptr;
+  pclose(pipe);
+  return listed;
+}
+
 std::vector<std::size_t> tasks_to_submit(const BatchFolder& folder, bool rerun_done) {
   std::vector<std::size_t> out;
   const std::vector<BatchTask> tasks = folder.tasks();
-  for (std::size_t i = 0; i < tasks.size(); ++i)
-    if (rerun_done || folder.state(tasks[i].name).state != "done") out.push_back(i);
+  for (std::size_t i = 0; i < tasks.size(); ++i) {
+    const TaskState s = folder.state(tasks[i].name);
+    if (s.state == "done" && !rerun_done) continue;
+    // Still running or queued under an earlier submission: a second copy would only meet its lock.
+    if ((s.state == "running" || s.state == "requeued" || s.state == "stopped") && job_in_queue(s.job)) continue;
+    out.push_back(i);
+  }
   return out;
 }
 
@@ -53,6 +68,9 @@ std::string sbatch_script(const BatchFolder& folder, const std::vector<std::size
   if (indices.empty()) return "";
   const std::vector<BatchTask> tasks = folder.tasks();
   const fs::path dir = fs::absolute(folder.dir());
+  // #SBATCH lines take no quoting: a path with blanks would be cut there.
+  if (dir.string().find_first_of(" \t\n") != std::string::npos)
+    throw InputError("the batch folder '" + dir.string() + "' has a blank in its path, which #SBATCH --output cannot hold: choose another --out");
   std::ostringstream s;
   s << "#!/bin/bash\n";
   s << "# nf_gpu batch: one array task per scene (" << dir.string() << "/batch.json lists them by index)\n";

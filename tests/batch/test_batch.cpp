@@ -170,6 +170,10 @@ TEST_CASE("the Slurm job script: an array of the tasks not done, requeueable, SI
                     "' --name \"${names[$SLURM_ARRAY_TASK_ID]}\" --max-requeues 3\n") != std::string::npos);
   CHECK(script.find("#SBATCH --job-name=nf_gpu-m.batch\n") != std::string::npos);
   CHECK(nf::batch::sbatch_script(folder, {}, o).empty());
+  // #SBATCH cannot quote a path: a batch folder with a blank is refused, naming it.
+  const nf::batch::BatchFolder blank(dir / "my batch");
+  blank.write(nf::batch::read_manifest(dir / "m.json"), dir / "m.json", "/usr/bin/true");
+  CHECK_THROWS_WITH_AS(nf::batch::sbatch_script(blank, indices, o), doctest::Contains("my batch"), nf::InputError);
 }
 
 TEST_CASE("the local runner: a GPU per slot (NF_DEVICE), the cores shared on a CPU driver, done tasks skipped, a killed task filed") {
@@ -218,6 +222,17 @@ TEST_CASE("the local runner: a GPU per slot (NF_DEVICE), the cores shared on a C
   (void)nf::batch::run_local(folder, cpu);
   CHECK(slurp(folder.dir() / "env-a") == "NF_DEVICE=none LP_NUM_THREADS=4\n");
   CHECK(slurp(folder.dir() / "env-c") == "NF_DEVICE=none LP_NUM_THREADS=4\n");
+
+  // A task another runner of this host is running is left to it.
+  nf::batch::TaskState live;
+  live.state = "running";
+  live.host = nf::host_name();
+  live.pid = getpid();
+  folder.write_state("a", live);
+  fs::remove(folder.dir() / "env-a");
+  const auto again = nf::batch::run_local(folder, cpu);
+  CHECK_FALSE(fs::exists(folder.dir() / "env-a"));
+  CHECK(again.skipped == 1);
 }
 
 TEST_CASE("a task's exit is filed as done, failed (a rerun cannot fix it) or stopped (a rerun resumes)") {
