@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <iostream>
+#include <set>
 
 #include "engine/batch/batch_report.hpp"
 #include "engine/batch/local_backend.hpp"
@@ -9,10 +10,16 @@
 #include "engine/batch/task_run.hpp"
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/text.hpp"
 
 namespace nf_cli {
 
 namespace fs = std::filesystem;
+
+namespace {
+const std::set<std::string> kSlurmOnly{"--partition", "--account", "--time", "--mem", "--gpus-per-task", "--cpus-per-task",
+                                       "--max-parallel", "--signal-seconds", "--sbatch", "--dry-run"};
+}  // namespace
 
 struct BatchCommand::Values {
   std::string manifest, out, backend = "local", name, folder;
@@ -48,7 +55,7 @@ BatchCommand::BatchCommand(CLI::App& app) : v_(std::make_shared<Values>()) {
   run_->add_option("--signal-seconds", v.slurm.signal_seconds, "slurm: SIGTERM this long before the time limit (default 120)")
       ->check(CLI::Range(10, 3600));
   run_->add_option("--sbatch", v.slurm.extra, "slurm: another #SBATCH option, e.g. --sbatch=--qos=low (repeatable)");
-  run_->add_flag("--dry-run", v.dry_run, "slurm: print the job script, submit nothing");
+  run_->add_flag("--dry-run", v.dry_run, "slurm: print the job script; write and submit nothing");
 
   task_ = command_->add_subcommand("task", "run one task of a batch (what the local runner and the Slurm job script call)");
   task_->add_option("folder", v.folder, "the batch folder")->required();
@@ -71,8 +78,13 @@ int BatchCommand::run() const {
     const std::vector<nf::batch::BatchTask> tasks = nf::batch::read_manifest(v.manifest);
     const fs::path dir = v.out.empty() ? nf::batch::default_batch_folder(v.manifest) : fs::path(v.out);
     const nf::batch::BatchFolder folder(dir);
-    if (!(v.backend == "slurm" && v.dry_run)) folder.write(tasks, v.manifest, nf::batch::self_executable());
     if (v.backend == "local") {
+      std::vector<std::string> slurm_only;
+      for (const CLI::Option* o : run_->get_options())
+        if (o->count() > 0 && kSlurmOnly.count(o->get_name()) > 0) slurm_only.push_back(o->get_name());
+      if (!slurm_only.empty())
+        throw nf::UsageError("batch run: " + nf::join(slurm_only) + " only apply to --backend slurm (this run is local)");
+      folder.write(tasks, v.manifest, nf::batch::self_executable());
       nf::batch::LocalOptions o = v.local;
       o.devices = nf::batch::gpu_device_indices();
       if (o.devices.size() < 2) o.devices.clear();  // one GPU or none: every task takes the default device
@@ -83,31 +95,23 @@ int BatchCommand::run() const {
       std::printf("batch folder: %s (nf_gpu batch status|report %s)\n", dir.string().c_str(), dir.string().c_str());
       return s.exit_code;
     }
+    if (run_->get_option("--jobs")->count() > 0) throw nf::UsageError("batch run: --jobs only applies to --backend local");
     nf::batch::SlurmOptions o = v.slurm;
     o.max_requeues = v.max_requeues;
     o.rerun_done = v.rerun_done;
+    // The tasks not done yet, by the states a batch folder already holds (none: all of them).
+    const std::vector<std::size_t> indices = nf::batch::tasks_to_submit(folder, tasks, v.rerun_done);
+    const std::string script = nf::batch::sbatch_script(dir, tasks, nf::batch::self_executable(), indices, o);
     if (v.dry_run) {
-      // Nothing is written: the script as it would be for a fresh batch folder.
-      const nf::batch::BatchFolder scratch(fs::temp_directory_path() / ("nf_gpu-dry-run-" + std::to_string(getpid())));
-      scratch.write(tasks, v.manifest, nf::batch::self_executable());
-      if (o.job_name.empty()) o.job_name = "nf_gpu-" + fs::absolute(dir).filename().string();
-      std::vector<std::size_t> all(tasks.size());
-      for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
-      std::string script = nf::batch::sbatch_script(scratch, all, o);
-      std::error_code ec;
-      fs::remove_all(scratch.dir(), ec);
-      // Name the folder the real run would use.
-      const std::string from = fs::absolute(scratch.dir()).string(), to = fs::absolute(dir).string();
-      for (std::size_t at = script.find(from); at != std::string::npos; at = script.find(from, at + to.size())) script.replace(at, from.size(), to);
-      std::cout << script;
+      std::cout << (script.empty() ? "# every scene is done: nothing would be submitted\n" : script);
       return 0;
     }
-    const std::vector<std::size_t> indices = nf::batch::tasks_to_submit(folder, v.rerun_done);
     if (indices.empty()) {
-      std::printf("batch: every scene is done; nothing submitted (--rerun-done runs them again)\n");
+      std::printf("batch: every scene is done or queued; nothing submitted (--rerun-done runs done ones again)\n");
       return 0;
     }
-    const std::string job = nf::batch::submit(folder, nf::batch::sbatch_script(folder, indices, o), indices.size());
+    folder.write(tasks, v.manifest, nf::batch::self_executable());
+    const std::string job = nf::batch::submit(folder, script, tasks, indices);
     std::printf("batch: submitted job array %s (%zu task(s)); script %s\nfollow it with: nf_gpu batch status %s\n", job.c_str(),
                 indices.size(), folder.sbatch_script().string().c_str(), dir.string().c_str());
     return 0;

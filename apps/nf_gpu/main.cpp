@@ -361,15 +361,7 @@ int run_pose(const nf::pipeline::PoseOptions& options, bool as_json) {
 // The command as typed, quoted where needed, for "resume with" messages.
 std::string quoted_command_line(int argc, char** argv) {
   std::string line;
-  for (int i = 0; i < argc; ++i) {
-    std::string arg = argv[i];
-    if (arg.find_first_of(" \t'\"$`\\") != std::string::npos) {
-      std::string q = "'";
-      for (char ch : arg) q += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
-      arg = q + "'";
-    }
-    line += (i ? " " : "") + arg;
-  }
+  for (int i = 0; i < argc; ++i) line += (i ? " " : "") + nf::shell_quote(argv[i]);
   return line;
 }
 

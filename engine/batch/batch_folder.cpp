@@ -26,8 +26,13 @@ json read_or_null(const fs::path& file) {
 void BatchFolder::write(const std::vector<BatchTask>& tasks, const fs::path& manifest, const fs::path& nf_gpu) const {
   fs::create_directories(dir_ / "tasks");
   fs::create_directories(dir_ / "logs");
-  json j = read_or_null(record());
-  if (!j.is_object()) j = json::object();
+  json j = json::object();
+  if (fs::exists(record())) {
+    j = read_or_null(record());
+    // Its submissions are the only record of the jobs in the queue: never replaced unread.
+    if (!j.is_object())
+      throw InputError(record().string() + " is damaged (not a JSON object): move it away (its Slurm jobs: squeue) and run again");
+  }
   j["version"] = 1;
   j["manifest"] = fs::absolute(manifest).string();
   j["nf_gpu"] = nf_gpu.string();
@@ -68,8 +73,13 @@ void BatchFolder::add_submission(const json& submission) const {
 
 TaskState BatchFolder::state(const std::string& task) const {
   TaskState s;
+  if (!fs::exists(state_file(task))) return s;
   const json j = read_or_null(state_file(task));
-  if (!j.is_object()) return s;
+  if (!j.is_object()) {
+    s.state = "unreadable";
+    s.message = state_file(task).string() + " is damaged: run the task again to rewrite it";
+    return s;
+  }
   s.state = j.value("state", s.state);
   s.attempts = j.value("attempts", 0);
   s.host = j.value("host", std::string());

@@ -15,9 +15,10 @@
 
 namespace nf::batch {
 
-// What a task's state file says. "pending" (never started), "running", "done", "failed" (a rerun
-// cannot fix it: bad input or usage), "stopped" (a signal or a device error: a rerun resumes),
-// "requeued" (stopped, and Slurm was asked to run it again).
+// What a task's state file says. "pending" (never started), "queued" (submitted to Slurm),
+// "running", "done", "failed" (a rerun cannot fix it: bad input or usage), "stopped" (a signal or
+// a device error: a rerun resumes), "requeued" (stopped, and Slurm was asked to run it again),
+// "unreadable" (the file is damaged; the message says which).
 struct TaskState {
   std::string state = "pending";
   int attempts = 0;

@@ -4,7 +4,6 @@
 #include <fstream>
 #include <map>
 #include <set>
-#include <sstream>
 
 #include "engine/core/error.hpp"
 #include "engine/core/text.hpp"
@@ -58,16 +57,19 @@ double scale_value(double v, const std::string& where) {
 }
 
 std::vector<BatchTask> read_json_manifest(const fs::path& file, const fs::path& base) {
-  std::ifstream in(file, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  const json root = io::parse_json(text.str(), file.string());
+  const json root = io::read_json_file(file);
   const io::JsonField top(root, file.string());
   Defaults defaults;
   const json* scenes = &root;
   std::string scenes_path;
   if (root.is_object()) {
+    for (const auto& [key, value] : root.items())
+      if (key != "defaults" && key != "scenes") top.fail("unknown field '" + key + "'" + did_you_mean(key, {"defaults", "scenes"}));
     if (const auto d = top.find("defaults")) {
+      if (!d->value().is_object()) d->fail("expected an object with \"quality\", \"scene_scale\" or \"settings\"");
+      for (const auto& [key, value] : d->value().items())
+        if (key != "quality" && key != "scene_scale" && key != "settings")
+          d->fail("unknown field '" + key + "'" + did_you_mean(key, {"quality", "scene_scale", "settings"}));
       if (const auto q = d->find("quality")) defaults.quality = q->string();
       if (const auto s = d->find("scene_scale")) defaults.scene_scale = scale_value(s->number(), file.string() + ": defaults");
       if (const auto s = d->find("settings")) add_settings(*s, defaults.settings);
@@ -85,6 +87,7 @@ std::vector<BatchTask> read_json_manifest(const fs::path& file, const fs::path& 
       if (key != "scene" && key != "work" && key != "name" && key != "quality" && key != "scene_scale" && key != "settings")
         entry.fail("unknown field '" + key + "'" + did_you_mean(key, {"scene", "work", "name", "quality", "scene_scale", "settings"}));
     BatchTask t;
+    t.origin = entry.path();
     t.scene = resolve(base, entry.at("scene").string());
     t.name = entry.has("name") ? entry.at("name").string() : default_name(t.scene);
     t.work = entry.has("work") ? resolve(base, entry.at("work").string()) : (base / "work" / t.name).lexically_normal();
@@ -154,6 +157,7 @@ std::vector<BatchTask> read_csv_manifest(const fs::path& file, const fs::path& b
     if (fields.size() != header.size())
       throw InputError(where + ": " + std::to_string(fields.size()) + " fields where the header has " + std::to_string(header.size()));
     BatchTask t;
+    t.origin = "line " + std::to_string(row);
     std::string work;
     for (std::size_t c = 0; c < header.size(); ++c) {
       const std::string& h = header[c];
@@ -198,8 +202,9 @@ std::vector<BatchTask> read_manifest(const fs::path& file) {
   if (tasks.empty()) throw InputError(file.string() + ": no scenes");
   std::map<std::string, std::string> names, works;
   for (const BatchTask& t : tasks) {
-    if (t.name.find_first_of("/\\") != std::string::npos || t.name == "." || t.name == "..")
-      throw InputError(file.string() + ": the name '" + t.name + "' cannot be a file name");
+    if (t.name.empty() || t.name.find_first_of("/\\") != std::string::npos || t.name == "." || t.name == ".." ||
+        t.name.find_first_of("\n\r\t") != std::string::npos)
+      throw InputError(file.string() + ": " + t.origin + ": the name '" + t.name + "' cannot be a file name");
     if (!names.emplace(t.name, t.scene.string()).second)
       throw InputError(file.string() + ": two scenes are named '" + t.name + "' (" + names[t.name] + ", " + t.scene.string() +
                        "): give each a \"name\"");
@@ -217,26 +222,10 @@ std::vector<BatchTask> read_manifest(const fs::path& file) {
     try {
       (void)pipeline::check_reconstruct_options(o);
     } catch (const Error& e) {
-      throw InputError(file.string() + ": scene '" + t.name + "': " + e.what());
+      throw InputError(file.string() + ": " + t.origin + " (scene '" + t.name + "'): " + e.what());
     }
   }
   return tasks;
-}
-
-std::vector<std::string> reconstruct_arguments(const BatchTask& t) {
-  std::vector<std::string> args{"reconstruct", "--scene", t.scene.string(), "--out", t.work.string(), "--quality", t.quality};
-  for (const std::string& s : t.settings) {
-    args.push_back("--set");
-    args.push_back(s);
-  }
-  if (t.scene_scale > 0) {
-    std::ostringstream s;
-    s.precision(17);
-    s << t.scene_scale;
-    args.push_back("--scene-scale");
-    args.push_back(s.str());
-  }
-  return args;
 }
 
 json to_json(const BatchTask& t) {

@@ -22,14 +22,12 @@ struct BatchTask {
   std::string quality = "default";
   double scene_scale = 0;              // cm per scene unit; 0: from the scene file or the eyes
   std::vector<std::string> settings;   // "stage.key=value", defaults first, then the scene's own
+  std::string origin;                  // where the manifest gives it ("scenes[2]", "line 4"), for messages
 };
 
 // Reads and checks a manifest (InputError naming the file, the row or entry and the field).
 // Every task's settings are checked against the stages' schemas (an unknown key, a bad value).
 std::vector<BatchTask> read_manifest(const std::filesystem::path& file);
-
-// The arguments of the `nf_gpu reconstruct` run a task is.
-std::vector<std::string> reconstruct_arguments(const BatchTask& task);
 
 json to_json(const BatchTask& task);
 BatchTask task_from_json(const json& j);

@@ -22,18 +22,22 @@ struct SlurmOptions {
   std::vector<std::string> extra;             // further #SBATCH lines, e.g. "--qos=low"
 };
 
-// The indices (into the batch's tasks) that are not done yet (all with rerun_done), leaving out
-// those an earlier submission still has in the queue (squeue lists their job).
-std::vector<std::size_t> tasks_to_submit(const BatchFolder& folder, bool rerun_done);
+// The indices (into `tasks`) that are not done yet (all with rerun_done), leaving out those an
+// earlier submission still has in the queue (squeue lists their job).
+std::vector<std::size_t> tasks_to_submit(const BatchFolder& folder, const std::vector<BatchTask>& tasks, bool rerun_done);
 
 // Whether squeue lists this job ("123" or "123_4").
 bool job_in_queue(const std::string& job);
 
-// The job script for those indices (empty: nothing to submit). InputError for a batch folder whose
-// path has a blank (#SBATCH lines cannot quote it).
-std::string sbatch_script(const BatchFolder& folder, const std::vector<std::size_t>& indices, const SlurmOptions& options);
+// The job script running these indices of `tasks` from the batch folder `dir` with the binary
+// `nf_gpu` (empty: nothing to submit). InputError for a folder whose path has a blank (#SBATCH lines
+// cannot quote it).
+std::string sbatch_script(const std::filesystem::path& dir, const std::vector<BatchTask>& tasks, const std::filesystem::path& nf_gpu,
+                          const std::vector<std::size_t>& indices, const SlurmOptions& options);
 
-// Writes the script, submits it with sbatch and records the job; returns the job id.
-std::string submit(const BatchFolder& folder, const std::string& script, std::size_t tasks);
+// Writes the script, submits it with sbatch, records the job and files each submitted task as
+// queued under it; returns the job id.
+std::string submit(const BatchFolder& folder, const std::string& script, const std::vector<BatchTask>& tasks,
+                   const std::vector<std::size_t>& indices);
 
 }  // namespace nf::batch

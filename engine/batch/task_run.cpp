@@ -5,16 +5,19 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cctype>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
-#include <iostream>
+#include <cstring>
 
+#include "engine/batch/local_backend.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/host.hpp"
 #include "engine/core/interrupt.hpp"
-#include "engine/core/log.hpp"
 #include "engine/gpu/context.hpp"
 #include "engine/pipeline/stages.hpp"
+#include "engine/pipeline/work_lock.hpp"
 
 extern char** environ;
 
@@ -33,7 +36,7 @@ std::string env(const char* name) {
 void redirect_output(const fs::path& log) {
   fs::create_directories(log.parent_path());
   const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
-  if (fd < 0) throw InputError("cannot open the task's log '" + log.string() + "'");
+  if (fd < 0) throw InputError("cannot open the task's log '" + log.string() + "': " + std::strerror(errno));
   std::fflush(stdout);
   std::fflush(stderr);
   dup2(fd, STDOUT_FILENO);
@@ -54,6 +57,24 @@ std::string requeue(const std::string& job) {
     if (errno != EINTR) return "waiting for scontrol failed";
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) return "scontrol requeue " + job + " failed (see the log)";
   return "";
+}
+
+// Under Slurm: the GPU and cores the job was given, for a task that was not told otherwise.
+// Slurm numbers a node's GPUs as its gres.conf lists them, usually in PCI order, which is also the
+// order in which Vulkan drivers list them; with device cgroups only the job's GPUs are visible and
+// the default choice is right.
+void take_slurm_resources() {
+  const std::string gpus = env("SLURM_JOB_GPUS").empty() ? env("SLURM_STEP_GPUS") : env("SLURM_JOB_GPUS");
+  if (env("NF_DEVICE").empty() && !gpus.empty() && std::isdigit(static_cast<unsigned char>(gpus[0]))) {
+    const std::size_t first = std::strtoul(gpus.c_str(), nullptr, 10);
+    const std::vector<std::string> visible = gpu_device_indices();
+    if (first < visible.size() && visible.size() > 1) setenv("NF_DEVICE", visible[first].c_str(), 1);
+  }
+  const std::string cpus = env("SLURM_CPUS_PER_TASK");
+  if (!cpus.empty()) {
+    if (env("NF_THREADS").empty()) setenv("NF_THREADS", cpus.c_str(), 1);
+    if (env("LP_NUM_THREADS").empty()) setenv("LP_NUM_THREADS", cpus.c_str(), 1);
+  }
 }
 
 }  // namespace
@@ -79,75 +100,113 @@ TaskVerdict verdict_of(int exit_code, const std::string& message) {
   return v;
 }
 
+bool may_requeue(int restarts, int max_requeues) { return restarts < max_requeues; }
+
 int run_task(const BatchFolder& folder, const std::string& name, const TaskRunOptions& options) {
   const std::vector<BatchTask> tasks = folder.tasks();
   const auto it = std::find_if(tasks.begin(), tasks.end(), [&](const BatchTask& t) { return t.name == name; });
   if (it == tasks.end()) throw UsageError("the batch in '" + folder.dir().string() + "' has no task named '" + name + "'");
   const BatchTask& task = *it;
   if (options.log_to_file) redirect_output(folder.log_file(name));
+  const std::string job = slurm_job_of_this_process();
+  if (!job.empty()) take_slurm_resources();
+
+  // A live run holds this WORK (a copy of this task still running elsewhere): its state is its own.
+  std::string busy;
+  if (const json holder = pipeline::WorkLock::holder(task.work); holder.is_object() && pipeline::WorkLock::stale_reason(task.work, holder).empty())
+    busy = "'" + task.work.string() + "' is in use by host " + holder.value("host", std::string("?")) + ", pid " +
+           std::to_string(holder.value("pid", 0L));
 
   TaskState s = folder.state(name);
-  s.state = "running";
-  s.attempts += 1;
-  s.host = host_name();
-  s.pid = long(getpid());
-  s.started = utc_now();
-  s.ended.clear();
-  s.job = slurm_job_of_this_process();
-  s.message.clear();
-  s.exit_code = 0;
-  folder.write_state(name, s);
-  std::printf("== %s: attempt %d of task '%s' on %s%s\n", s.started.c_str(), s.attempts, name.c_str(), s.host.c_str(),
-              s.job.empty() ? "" : (" (Slurm job " + s.job + ")").c_str());
-  std::fflush(stdout);
-
-  install_interrupt_handler();
+  const TaskState before = s;
   int code = 0;
   std::string message;
-  try {
-    pipeline::ReconstructOptions o;
-    o.scene = task.scene;
-    o.work = task.work;
-    o.quality = task.quality;
-    o.settings = task.settings;
-    if (task.scene_scale > 0) o.settings.push_back("knowledge.cm_per_unit=" + json(task.scene_scale).dump());
-    gpu::Context context;
-    const auto outcomes = pipeline::reconstruct(context, o);
-    for (const auto& out : outcomes) std::printf("%-10s %s\n", out.name.c_str(), out.ran ? ("ran in " + std::to_string(out.seconds) + " s").c_str() : "unchanged, skipped");
-  } catch (const Interrupted& e) {
-    code = interrupted_exit_code();
-    message = e.what();
-  } catch (const Error& e) {
-    code = int(e.code());
-    message = e.what();
-  } catch (const std::exception& e) {
-    code = int(ExitCode::DeviceOrInternal);
-    message = std::string("internal error: ") + e.what();
+  install_interrupt_handler();
+  if (busy.empty()) {
+    s.state = "running";
+    s.attempts += 1;
+    s.host = host_name();
+    s.pid = long(getpid());
+    s.started = utc_now();
+    s.ended.clear();
+    s.job = job;
+    s.message.clear();
+    s.exit_code = 0;
+    folder.write_state(name, s);
+    std::printf("== %s: attempt %d of task '%s' on %s%s\n", s.started.c_str(), s.attempts, name.c_str(), s.host.c_str(),
+                job.empty() ? "" : (" (Slurm job " + job + ")").c_str());
+    std::fflush(stdout);
+    try {
+      pipeline::ReconstructOptions o;
+      o.scene = task.scene;
+      o.work = task.work;
+      o.quality = task.quality;
+      o.settings = task.settings;
+      if (task.scene_scale > 0) o.settings.push_back("knowledge.cm_per_unit=" + json(task.scene_scale).dump());
+      gpu::Context context;
+      const auto outcomes = pipeline::reconstruct(context, o);
+      for (const auto& out : outcomes)
+        std::printf("%-10s %s\n", out.name.c_str(), out.ran ? ("ran in " + std::to_string(out.seconds) + " s").c_str() : "unchanged, skipped");
+    } catch (const Interrupted& e) {
+      code = interrupted_exit_code();
+      message = e.what();
+    } catch (const pipeline::WorkBusyError& e) {
+      busy = e.what();  // lost the race for the lock after the check above
+    } catch (const Error& e) {
+      code = int(e.code());
+      message = e.what();
+    } catch (const fs::filesystem_error& e) {
+      // As `nf_gpu reconstruct` reports it: a folder or file that cannot be read or written.
+      code = int(ExitCode::BadInput);
+      message = (e.path1().empty() ? "" : e.path1().string() + ": ") + e.code().message();
+    } catch (const std::exception& e) {
+      code = int(ExitCode::DeviceOrInternal);
+      message = std::string("internal error: ") + e.what();
+    }
+  }
+  // From here on a signal must not cut the filing short: Slurm's own SIGTERM follows a requeue.
+  std::signal(SIGTERM, SIG_IGN);
+  std::signal(SIGINT, SIG_IGN);
+  if (!busy.empty()) {
+    code = kBusyExitCode;
+    message = busy;
+    s = before;  // the holder's state stays as it keeps it
+  } else {
+    const TaskVerdict v = verdict_of(code, message);
+    s.state = v.state;
+    s.exit_code = v.exit_code;
+    s.message = v.message;
+    s.ended = utc_now();
   }
   if (!message.empty()) std::fprintf(stderr, "nf_gpu: %s\n", message.c_str());
 
-  const TaskVerdict v = verdict_of(code, message);
-  s.state = v.state;
-  s.exit_code = v.exit_code;
-  s.message = v.message;
-  s.ended = utc_now();
-  if (v.retryable && !s.job.empty()) {
+  const bool retryable = !busy.empty() || verdict_of(code, message).retryable;
+  if (retryable && !job.empty()) {
     // SLURM_RESTART_COUNT counts this job's requeues, whoever asked for them.
     const int restarts = std::atoi(env("SLURM_RESTART_COUNT").c_str());
-    if (restarts >= options.max_requeues) {
-      s.state = "failed";
-      s.message += " (requeued " + std::to_string(restarts) + " times already: the limit, --max-requeues)";
-    } else if (const std::string why = requeue(s.job); why.empty()) {
-      s.state = "requeued";
+    if (!may_requeue(restarts, options.max_requeues)) {
+      if (busy.empty()) {
+        s.state = "failed";
+        s.message += " (requeued " + std::to_string(restarts) + " times already: the limit, --max-requeues)";
+      }
     } else {
-      // Slurm refuses when it is requeueing the job already (scontrol requeue, preemption): then
-      // it runs again anyway.
-      s.message += " (" + why + "; a job Slurm requeued itself runs again)";
+      // Filed before asking: Slurm's SIGTERM may follow the request at once.
+      const TaskState filed = s;
+      if (busy.empty()) {
+        s.state = "requeued";
+        folder.write_state(name, s);
+      }
+      if (const std::string why = requeue(job); !why.empty()) {
+        // Slurm refuses when it is requeueing the job already (scontrol requeue, preemption): then
+        // it runs again anyway.
+        s = filed;
+        if (busy.empty()) s.message += " (" + why + "; a job Slurm requeued itself runs again)";
+      }
     }
   }
-  folder.write_state(name, s);
-  std::printf("== %s: task '%s' %s%s\n", s.ended.c_str(), name.c_str(), s.state.c_str(),
-              s.exit_code ? (" (exit " + std::to_string(s.exit_code) + ")").c_str() : "");
+  if (busy.empty()) folder.write_state(name, s);
+  std::printf("== %s: task '%s' %s%s\n", utc_now().c_str(), name.c_str(), busy.empty() ? s.state.c_str() : "left to the run holding its WORK",
+              code ? (" (exit " + std::to_string(code) + ")").c_str() : "");
   std::fflush(stdout);
   return code;
 }

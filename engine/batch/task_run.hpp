@@ -13,7 +13,11 @@ struct TaskRunOptions {
   int max_requeues = 3;      // Slurm: requeues a task may ask for itself before it is left failed
 };
 
-// How a finished attempt is filed: its state and whether Slurm should run it again.
+// The exit code of a task whose WORK another live run holds (EX_TEMPFAIL): its state file is left
+// as that run keeps it, and under Slurm it is requeued to try later.
+constexpr int kBusyExitCode = 75;
+
+// How a finished attempt is filed: its state and whether a rerun can finish it.
 struct TaskVerdict {
   std::string state;     // done, failed or stopped
   int exit_code = 0;
@@ -21,10 +25,14 @@ struct TaskVerdict {
   std::string message;
 };
 // From the reconstruct's exit code: 0 done; 1 (bad input) and 2 (usage) failed, a rerun cannot fix
-// them; 130/143 (stopped on a signal) and 3 (device lost or out of memory) stopped, a rerun resumes.
+// them; 130/143 (stopped on a signal), 3 (device lost or out of memory), 75 (WORK busy) and deaths
+// by a signal stopped, a rerun resumes.
 TaskVerdict verdict_of(int exit_code, const std::string& message);
 
-// Runs the task, returns the process exit code (0 done; else the reconstruct's).
+// Whether a retryable task under Slurm may requeue itself, having been requeued `restarts` times.
+bool may_requeue(int restarts, int max_requeues);
+
+// Runs the task, returns the process exit code (0 done; else the reconstruct's, or kBusyExitCode).
 int run_task(const BatchFolder& folder, const std::string& name, const TaskRunOptions& options);
 
 // The Slurm job of this process ("<array job>_<index>" or the job id), "" outside Slurm.

@@ -64,10 +64,11 @@ void write_file_atomic(const std::filesystem::path& path, const std::function<vo
       if (!out) throw InputError("writing '" + path.string() + "' failed: " + write_failure(errno) + "; nothing was left in its place");
     }
     // On a file server a rename can reach the disk before the data it names: sync both.
-    sync_file(tmp);
+    if (const int error = sync_file(tmp))
+      throw InputError("writing '" + path.string() + "' failed: " + write_failure(error) + "; nothing was left in its place");
     fs::rename(tmp, path, ec);
     if (ec) throw InputError("cannot move '" + tmp.string() + "' to '" + path.string() + "': " + ec.message());
-    sync_folder(dir);
+    (void)sync_folder(dir);  // the file is complete under its name either way
   } catch (...) {
     fs::remove(tmp, ec);
     throw;

@@ -34,26 +34,27 @@ bool process_alive(pid_t pid) {
 
 namespace {
 
-void sync_path(const std::filesystem::path& path, int flags) {
+int sync_path(const std::filesystem::path& path, int flags) {
   const int fd = open(path.c_str(), flags | O_CLOEXEC);
-  if (fd < 0) return;
-  (void)fsync(fd);
+  if (fd < 0) return 0;  // gone or unreadable: nothing of ours to lose
+  const int result = fsync(fd) == 0 ? 0 : errno;
   close(fd);
+  return result == EINVAL || result == EROFS || result == ENOTSUP || result == EBADF ? 0 : result;
 }
 
 }  // namespace
 
-void sync_file(const std::filesystem::path& file) { sync_path(file, O_RDONLY); }
+int sync_file(const std::filesystem::path& file) { return sync_path(file, O_RDONLY); }
 
-void sync_folder(const std::filesystem::path& folder) { sync_path(folder, O_RDONLY | O_DIRECTORY); }
+int sync_folder(const std::filesystem::path& folder) { return sync_path(folder, O_RDONLY | O_DIRECTORY); }
 
-void sync_tree(const std::filesystem::path& folder) {
+int sync_tree(const std::filesystem::path& folder) {
   std::error_code ec;
   for (const auto& e : std::filesystem::recursive_directory_iterator(folder, ec)) {
-    if (e.is_regular_file(ec)) sync_file(e.path());
-    else if (e.is_directory(ec)) sync_folder(e.path());
+    const int error = e.is_regular_file(ec) ? sync_file(e.path()) : e.is_directory(ec) ? sync_folder(e.path()) : 0;
+    if (error) return error;
   }
-  sync_folder(folder);
+  return sync_folder(folder);
 }
 
 }  // namespace nf

@@ -18,12 +18,13 @@ std::string utc_now();
 bool process_alive(pid_t pid);
 
 // Flushes a written file, then its folder's entry, to the disk (or the file server): what a rename
-// needs before it is trusted on a shared filesystem. Errors are ignored: the data is already written
-// and a filesystem without fsync (tmpfs, some FUSE) loses nothing by it.
-void sync_file(const std::filesystem::path& file);
-void sync_folder(const std::filesystem::path& folder);
+// needs before it is trusted on a shared filesystem. Returns 0 or the errno of a failure that lost
+// data (EIO, ENOSPC, EDQUOT: on NFS the write errors a server defers surface here); a filesystem
+// that cannot sync (EINVAL, EROFS, ENOTSUP: tmpfs, some FUSE) counts as success.
+int sync_file(const std::filesystem::path& file);
+int sync_folder(const std::filesystem::path& folder);
 // Every file and folder under `folder`, then the folder itself: before a finished output folder is
 // renamed into place (its writers include libraries that do not sync).
-void sync_tree(const std::filesystem::path& folder);
+int sync_tree(const std::filesystem::path& folder);  // the first failure's errno, or 0
 
 }  // namespace nf

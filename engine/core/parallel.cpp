@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdlib>
 #include <exception>
 #include <mutex>
 #include <thread>
@@ -9,8 +10,17 @@
 
 namespace nf {
 
+unsigned cpu_threads() {
+  if (const char* text = std::getenv("NF_THREADS")) {
+    char* end = nullptr;
+    const long v = std::strtol(text, &end, 10);
+    if (end != text && *end == '\0' && v > 0) return unsigned(std::min<long>(v, 4096));
+  }
+  return std::max(1u, std::thread::hardware_concurrency());
+}
+
 void parallel_for(std::size_t count, const std::function<void(std::size_t, std::size_t)>& body) {
-  const std::size_t threads = std::max<std::size_t>(1, std::min<std::size_t>(std::thread::hardware_concurrency(), count / 1024 + 1));
+  const std::size_t threads = std::max<std::size_t>(1, std::min<std::size_t>(cpu_threads(), count / 1024 + 1));
   std::vector<std::thread> pool;
   std::vector<std::exception_ptr> errors(threads);
   const std::size_t chunk = (count + threads - 1) / threads;
@@ -36,7 +46,7 @@ void parallel_for(std::size_t count, const std::function<void(std::size_t, std::
 }
 
 void for_each_dynamic(int count, const std::function<void(int)>& body) {
-  const int threads = std::max(1, std::min<int>(int(std::thread::hardware_concurrency()), count));
+  const int threads = std::max(1, std::min<int>(int(cpu_threads()), count));
   std::atomic<int> next{0};
   std::exception_ptr error;
   std::mutex error_mutex;

@@ -6,6 +6,10 @@
 
 namespace nf {
 
+// The threads host work uses: NF_THREADS when set to a positive number (a batch task sharing the
+// machine with others), else the machine's cores.
+unsigned cpu_threads();
+
 // Runs body(begin, end) over [0, count) split across the machine's cores.
 void parallel_for(std::size_t count, const std::function<void(std::size_t, std::size_t)>& body);
 

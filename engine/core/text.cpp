@@ -51,6 +51,15 @@ std::string shorten(std::string_view text, std::size_t max_bytes) {
   return n < text.size() ? out + "..." : out;
 }
 
+std::string shell_quote(std::string_view word) {
+  const bool safe = !word.empty() && word.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789"
+                                                           "@%+=:,./_-") == std::string_view::npos;
+  if (safe) return std::string(word);
+  std::string out = "'";
+  for (char ch : word) out += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
+  return out + "'";
+}
+
 std::string join(const std::vector<std::string>& items, std::string_view separator) {
   std::string out;
   for (const std::string& item : items) {

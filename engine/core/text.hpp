@@ -23,6 +23,10 @@ std::string to_lower(std::string text);
 // control characters as spaces: for quoting untrusted text in a message.
 std::string shorten(std::string_view text, std::size_t max_bytes);
 
+// A word for a POSIX shell: as it is when it holds only safe characters, else single-quoted (for
+// commands printed to be pasted, and job scripts).
+std::string shell_quote(std::string_view word);
+
 // "a, b, c"
 std::string join(const std::vector<std::string>& items, std::string_view separator = ", ");
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <new>
 #include <set>
 
@@ -302,11 +303,15 @@ std::vector<StageOutcome> run_pipeline(const std::vector<std::unique_ptr<Stage>>
                                                   .dump(2) + "\n");
     // Swap: the previous result is removed only once the new one is complete, and on disk (a
     // file server may otherwise commit the renames before the data they name).
-    sync_tree(partial);
+    if (const int error = sync_tree(partial)) {
+      fs::remove_all(partial);
+      throw InputError("stage " + name + ": its outputs in '" + partial.string() + "' could not be written to disk: " +
+                       std::strerror(error) + " (the earlier result is kept; free space or fix the disk, then run again)");
+    }
     fs::remove_all(old);
     if (fs::exists(dir)) fs::rename(dir, old);
     fs::rename(partial, dir);
-    sync_folder(c.work);
+    (void)sync_folder(c.work);
     fs::remove_all(old);
     fs::remove_all(resume);
     log::info("stage ", name, ": done in ", outcome.seconds, " s");

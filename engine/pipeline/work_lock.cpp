@@ -12,6 +12,7 @@
 
 #include "engine/core/error.hpp"
 #include "engine/core/host.hpp"
+#include "engine/core/interrupt.hpp"
 #include "engine/core/log.hpp"
 
 namespace nf::pipeline {
@@ -93,8 +94,6 @@ WorkLock::WorkLock(const fs::path& work, const std::string& command) : path_(fil
   fs::create_directories(work, ec);
   if (ec) throw InputError("cannot create the WORK folder '" + work.string() + "': " + ec.message());
   token_ = json{{"host", host_name()}, {"pid", long(getpid())}, {"started", utc_now()}, {"command", command}}.dump() + "\n";
-  // Two tries: the second after a stale lock was removed (another taker may win the race; then
-  // its fresh lock is reported like any live one).
   for (int attempt = 0; attempt < 2; ++attempt) {
     if (create_exclusive(path_, token_)) {
       thread_ = std::thread([this] { heartbeat(); });
@@ -106,29 +105,47 @@ WorkLock::WorkLock(const fs::path& work, const std::string& command) : path_(fil
       who = json::parse(seen);
     } catch (const json::exception&) {
     }
-    const std::string reason = who.is_object() ? stale_reason(work, who) : "it is not a lock nf_gpu wrote";
-    if (attempt == 0 && who.is_object() && !reason.empty()) {
-      // Remove only the lock we judged: a taker that got there first has written another.
-      if (read_text(path_) == seen) {
-        log::warn("'", path_.string(), "' was held by ", who.value("host", std::string("?")), " (pid ", who.value("pid", 0L), "), but ", reason,
-                  ": taking it over (the stages resume from their checkpoints)");
-        fs::remove(path_, ec);
+    if (!who.is_object())
+      throw InputError("'" + path_.string() + "' exists but is not a lock nf_gpu wrote: remove it if no nf_gpu run uses '" +
+                       work.string() + "'");
+    const std::string reason = stale_reason(work, who);
+    if (attempt == 0 && !reason.empty()) {
+      // Rename what we judged aside: only one taker can, and it takes over only if the file it
+      // moved is the one it judged (else it moved a fresh lock of a faster taker, and puts it back).
+      const fs::path aside = path_.string() + ".stale-" + host_name() + "-" + std::to_string(getpid());
+      fs::rename(path_, aside, ec);
+      if (ec) continue;  // another taker moved it first
+      if (read_text(aside) != seen) {
+        if (link(aside.c_str(), path_.c_str()) != 0)
+          log::warn("'", path_.string(), "' changed hands while it was being taken over; the other run will notice and stop");
+        fs::remove(aside, ec);
+        continue;
       }
+      fs::remove(aside, ec);
+      log::warn("'", path_.string(), "' was held by ", who.value("host", std::string("?")), " (pid ", who.value("pid", 0L), "), but ", reason,
+                ": taking it over (the stages resume from their checkpoints)");
       continue;
     }
-    if (!who.is_object())
-      throw InputError("'" + path_.string() + "' exists but " + reason + ": remove it if no nf_gpu run uses '" + work.string() + "'");
-    throw InputError("'" + work.string() + "' is in use by another nf_gpu run: host " + who.value("host", std::string("?")) + ", pid " +
-                     std::to_string(who.value("pid", 0L)) + ", since " + who.value("started", std::string("?")) + " (" +
-                     who.value("command", std::string()) + "); wait for it, stop it, or use another --out (its lock: " +
-                     path_.string() + ")");
+    throw WorkBusyError("'" + work.string() + "' is in use by another nf_gpu run: host " + who.value("host", std::string("?")) + ", pid " +
+                        std::to_string(who.value("pid", 0L)) + ", since " + who.value("started", std::string("?")) + " (" +
+                        who.value("command", std::string()) + "); wait for it, stop it, or use another --out (its lock: " +
+                        path_.string() + ")");
   }
-  throw InputError("'" + work.string() + "' is being taken by another nf_gpu run at this moment: try again");
+  throw WorkBusyError("'" + work.string() + "' is being taken by another nf_gpu run at this moment: try again");
 }
 
 void WorkLock::heartbeat() {
+  const auto period = std::chrono::duration_cast<std::chrono::milliseconds>(
+      std::min(std::chrono::duration<double>(kHeartbeat), std::chrono::duration<double>(stale_seconds() / 10)));
   std::unique_lock<std::mutex> lock(mutex_);
-  while (!wake_.wait_for(lock, kHeartbeat, [this] { return stopping_; })) {
+  while (!wake_.wait_for(lock, period, [this] { return stopping_; })) {
+    if (read_text(path_) != token_) {
+      // Taken over while we were stopped past the limit (SIGSTOP, a suspended VM): two runs must
+      // not write one WORK, so this one stops as Ctrl-C would.
+      log::error("'", path_.string(), "' is no longer this run's lock (another run took it over): stopping");
+      set_interrupted(true);
+      return;
+    }
     std::error_code ec;
     fs::last_write_time(path_, fs::file_time_type::clock::now(), ec);
   }

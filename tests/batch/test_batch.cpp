@@ -7,8 +7,10 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <csignal>
 #include <cstdlib>
 #include <set>
+#include <thread>
 
 #include "engine/batch/batch_folder.hpp"
 #include "engine/batch/batch_report.hpp"
@@ -18,6 +20,7 @@
 #include "engine/batch/task_run.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/host.hpp"
+#include "engine/core/interrupt.hpp"
 #include "engine/pipeline/work_lock.hpp"
 #include "tests/support/files.hpp"
 
@@ -80,11 +83,7 @@ TEST_CASE("a JSON manifest: defaults, per-scene overrides, names, WORK folders a
   // The scene's own settings come after the defaults, so reconstruct's last --set wins.
   const auto& s = tasks[1].settings;
   CHECK(std::find(s.begin(), s.end(), "fur.steps=40") > std::find(s.begin(), s.end(), "fur.steps=120"));
-  const auto args = nf::batch::reconstruct_arguments(tasks[1]);
-  CHECK(args[0] == "reconstruct");
-  CHECK(has(args, "--scene-scale"));
-  CHECK(has(args, (dir / "dogs" / "rex").lexically_normal().string()));
-  CHECK(args[std::size_t(std::find(args.begin(), args.end(), "--quality") - args.begin()) + 1] == "default");
+  CHECK(tasks[1].origin == "scenes[1]");
   // batch.json keeps them exactly.
   const nf::batch::BatchFolder folder(dir / "m.batch");
   folder.write(tasks, dir / "m.json", "/usr/bin/true");
@@ -127,7 +126,7 @@ TEST_CASE("manifest errors name the file, the entry and the field") {
   check("unknown.json", R"([{"scene": "a", "setings": {}}])", {"unknown.json", "[0]", "setings", "did you mean 'settings'"});
   check("missing.json", R"([{"work": "w"}])", {"missing.json", "scene"});
   check("noscene.json", R"([{"scene": "nowhere"}])", {"scene 'nowhere'", "no such file"});
-  check("badkey.json", R"([{"scene": "a", "settings": {"fur.stepz": 3}}])", {"scene 'a'", "stepz"});
+  check("badkey.json", R"([{"scene": "a", "settings": {"fur.stepz": 3}}])", {"[0] (scene 'a')", "stepz"});
   check("badvalue.json", R"([{"scene": "a", "settings": {"fur.steps": -4}}])", {"scene 'a'", "fur", "steps"});
   check("flat.json", R"([{"scene": "a", "settings": {"steps": 4}}])", {"'steps' is not \"stage.key\""});
   check("samework.json", R"([{"scene": "a", "work": "w"}, {"scene": "x/a", "name": "a2", "work": "w"}])",
@@ -135,6 +134,11 @@ TEST_CASE("manifest errors name the file, the entry and the field") {
   check("samename.json", R"([{"scene": "a"}, {"scene": "x/a"}])", {"two scenes are named 'a'", "\"name\""});
   check("scale.json", R"([{"scene": "a", "scene_scale": 0}])", {"scene_scale must be a positive number"});
   check("empty.json", "[]", {"no scenes"});
+  check("top.json", R"({"scenes": [{"scene": "a"}], "default": {}})", {"unknown field 'default'", "did you mean 'defaults'"});
+  check("defaults.json", R"({"defaults": {"qualty": "draft"}, "scenes": [{"scene": "a"}]})", {"defaults", "qualty", "did you mean 'quality'"});
+  check("noname.json", R"([{"scene": "a", "name": ""}])", {"[0]", "cannot be a file name"});
+  check("badline.csv", "scene,work,name,knowledge.preset,fur.steps\na,w1,a1,cat,10\na,w2,a2,cat,-3\n", {"badline.csv: line 3", "steps"});
+  check("unreadable.json", "", {"unreadable.json"});
   check("short.csv", "scene,work\na\n", {"short.csv: line 2", "1 fields where the header has 2"});
   check("column.csv", "scene,wrok\na,w\n", {"column 'wrok'", "did you mean 'work'"});
   check("quote.csv", "scene,work\n\"a,w\n", {"line 2", "quoted field is not closed"});
@@ -150,30 +154,28 @@ TEST_CASE("the Slurm job script: an array of the tasks not done, requeueable, SI
   nf::batch::TaskState done;
   done.state = "done";
   folder.write_state("c", done);
-  const auto indices = nf::batch::tasks_to_submit(folder, false);
+  const auto tasks = folder.tasks();
+  const auto indices = nf::batch::tasks_to_submit(folder, tasks, false);
   CHECK(indices == std::vector<std::size_t>{0, 1, 3});
-  CHECK(nf::batch::tasks_to_submit(folder, true).size() == 4);
+  CHECK(nf::batch::tasks_to_submit(folder, tasks, true).size() == 4);
   nf::batch::SlurmOptions o;
   o.partition = "gpu";
   o.time = "2:00:00";
   o.gpus_per_task = 1;
   o.max_parallel = 2;
   o.extra = {"--qos=low"};
-  const std::string script = nf::batch::sbatch_script(folder, indices, o);
+  const std::string script = nf::batch::sbatch_script(folder.dir(), tasks, "/opt/nf gpu/nf_gpu", indices, o);
   INFO(script);
   for (const char* line : {"#SBATCH --array=0-1,3%2\n", "#SBATCH --requeue\n", "#SBATCH --signal=B:TERM@120\n", "#SBATCH --partition=gpu\n",
                            "#SBATCH --time=2:00:00\n", "#SBATCH --gres=gpu:1\n", "#SBATCH --qos=low\n", "#SBATCH --open-mode=append\n",
-                           "names=('a' 'b' 'c' 'd')\n"})
+                           "names=(a b c d)\n", "#SBATCH --job-name=nf_gpu-m.batch\n"})
     CHECK(script.find(line) != std::string::npos);
   // exec: the batch shell becomes nf_gpu, so the B: signal reaches the stages; the path is quoted.
-  CHECK(script.find("exec '/opt/nf gpu/nf_gpu' batch task '" + fs::absolute(folder.dir()).string() +
-                    "' --name \"${names[$SLURM_ARRAY_TASK_ID]}\" --max-requeues 3\n") != std::string::npos);
-  CHECK(script.find("#SBATCH --job-name=nf_gpu-m.batch\n") != std::string::npos);
-  CHECK(nf::batch::sbatch_script(folder, {}, o).empty());
+  CHECK(script.find("exec '/opt/nf gpu/nf_gpu' batch task " + fs::absolute(folder.dir()).string() +
+                    " --name=\"${names[$SLURM_ARRAY_TASK_ID]}\" --max-requeues 3\n") != std::string::npos);
+  CHECK(nf::batch::sbatch_script(folder.dir(), tasks, "/x", {}, o).empty());
   // #SBATCH cannot quote a path: a batch folder with a blank is refused, naming it.
-  const nf::batch::BatchFolder blank(dir / "my batch");
-  blank.write(nf::batch::read_manifest(dir / "m.json"), dir / "m.json", "/usr/bin/true");
-  CHECK_THROWS_WITH_AS(nf::batch::sbatch_script(blank, indices, o), doctest::Contains("my batch"), nf::InputError);
+  CHECK_THROWS_WITH_AS(nf::batch::sbatch_script(dir / "my batch", tasks, "/x", indices, o), doctest::Contains("my batch"), nf::InputError);
 }
 
 TEST_CASE("the local runner: a GPU per slot (NF_DEVICE), the cores shared on a CPU driver, done tasks skipped, a killed task filed") {
@@ -184,7 +186,7 @@ TEST_CASE("the local runner: a GPU per slot (NF_DEVICE), the cores shared on a C
   // done, except the scene "d", which dies by SIGKILL before it can file anything.
   const fs::path fake = dir / "fake_nf_gpu.sh";
   spit(fake, "#!/bin/sh\n"
-             "name=$5\n"
+             "name=${4#--name=}\n"
              "echo \"NF_DEVICE=${NF_DEVICE:-none} LP_NUM_THREADS=${LP_NUM_THREADS:-none}\" > \"$3/env-$name\"\n"
              "sleep 0.3\n"
              "[ \"$name\" = d ] && kill -9 $$\n"
@@ -236,6 +238,11 @@ TEST_CASE("the local runner: a GPU per slot (NF_DEVICE), the cores shared on a C
 }
 
 TEST_CASE("a task's exit is filed as done, failed (a rerun cannot fix it) or stopped (a rerun resumes)") {
+  CHECK(nf::batch::may_requeue(0, 3));
+  CHECK(nf::batch::may_requeue(2, 3));
+  CHECK_FALSE(nf::batch::may_requeue(3, 3));
+  CHECK_FALSE(nf::batch::may_requeue(0, 0));
+  CHECK(nf::batch::verdict_of(nf::batch::kBusyExitCode, "").retryable);
   CHECK(nf::batch::verdict_of(0, "").state == "done");
   for (int code : {1, 2}) {
     const auto v = nf::batch::verdict_of(code, "bad");
@@ -247,6 +254,30 @@ TEST_CASE("a task's exit is filed as done, failed (a rerun cannot fix it) or sto
     CHECK(v.state == "stopped");
     CHECK(v.retryable);
   }
+}
+
+TEST_CASE("a task whose WORK another live run holds leaves that run's state alone and exits 75") {
+  const fs::path dir = fresh("busy");
+  fs::create_directories(dir / "a");
+  spit(dir / "m.json", R"({"defaults": {"settings": {"knowledge.preset": "cat"}}, "scenes": [{"scene": "a", "work": "wa"}]})");
+  const nf::batch::BatchFolder folder(dir / "m.batch");
+  folder.write(nf::batch::read_manifest(dir / "m.json"), dir / "m.json", "/usr/bin/true");
+  nf::batch::TaskState theirs;
+  theirs.state = "running";
+  theirs.attempts = 1;
+  theirs.host = "node7";
+  theirs.job = "12_0";
+  folder.write_state("a", theirs);
+  const std::string before = slurp(folder.state_file("a"));
+  {
+    const nf::pipeline::WorkLock held(dir / "wa", "the other copy");
+    nf::batch::TaskRunOptions o;
+    o.log_to_file = false;
+    CHECK(nf::batch::run_task(folder, "a", o) == nf::batch::kBusyExitCode);
+  }
+  std::signal(SIGTERM, SIG_DFL);  // the task ignores signals once it files
+  std::signal(SIGINT, SIG_DFL);
+  CHECK(slurp(folder.state_file("a")) == before);
 }
 
 TEST_CASE("status rows: the stage reached, seconds and scores from the WORK records, and a task whose process died") {
@@ -322,6 +353,7 @@ TEST_CASE("the WORK lock: one run at a time, a dead holder's lock taken over, a 
     }
     INFO(message);
     CHECK(message.find("in use by another nf_gpu run") != std::string::npos);
+    CHECK_THROWS_AS(nf::pipeline::WorkLock(work, "third"), nf::pipeline::WorkBusyError);
     CHECK(message.find("pid " + std::to_string(getpid())) != std::string::npos);
     CHECK(message.find("first") != std::string::npos);
     CHECK(fs::exists(file));  // the refused run left the holder's lock alone
@@ -343,6 +375,22 @@ TEST_CASE("the WORK lock: one run at a time, a dead holder's lock taken over, a 
       CHECK(nf::pipeline::WorkLock::holder(work)["command"] == "new");
     }
     unsetenv("NF_WORK_LOCK_STALE_S");
+  }
+  SUBCASE("the holder refreshes its lock, and stops its run when another took it over") {
+    setenv("NF_WORK_LOCK_STALE_S", "2", 1);  // a refresh every 0.2 s
+    {
+      const nf::pipeline::WorkLock lock(work, "mine");
+      fs::last_write_time(file, fs::file_time_type::clock::now() - std::chrono::seconds(100));
+      std::this_thread::sleep_for(std::chrono::milliseconds(700));
+      CHECK(fs::file_time_type::clock::now() - fs::last_write_time(file) < std::chrono::seconds(2));
+      CHECK_FALSE(nf::interrupted());
+      spit(file, json{{"host", "elsewhere"}, {"pid", 7}, {"started", "x"}, {"command", "theirs"}}.dump());
+      std::this_thread::sleep_for(std::chrono::milliseconds(700));
+      CHECK(nf::interrupted());  // the stages stop as on Ctrl-C, saving their checkpoints
+    }
+    nf::set_interrupted(false);
+    unsetenv("NF_WORK_LOCK_STALE_S");
+    CHECK(nf::pipeline::WorkLock::holder(work)["command"] == "theirs");
   }
   SUBCASE("a file that is not a lock is never removed") {
     spit(file, "somebody's notes");

@@ -1,4 +1,5 @@
-// `nf_gpu batch` end to end on tiny synthetic scenes:
+// `nf_gpu batch` end to end on tiny synthetic scenes (and, under Slurm, one whose scene file is
+// broken: it fails once and is not requeued):
 // - local: two scenes two at a time, the runner stopped with SIGTERM in their fur stages, then run
 //   again: each resumes from its checkpoint and ends like the same scene run with `reconstruct`;
 //   status, the reports, and the WORK lock refusing a second run;
@@ -52,10 +53,16 @@ std::vector<Scene> make_scenes(const fs::path& root, int count) {
   return scenes;
 }
 
-void write_manifest(const fs::path& file, const std::vector<Scene>& scenes) {
+// `broken`: one more scene whose transforms.json is not JSON, which only its task finds out.
+void write_manifest(const fs::path& file, const std::vector<Scene>& scenes, bool broken = false) {
   json list = json::array();
   for (const Scene& s : scenes)
     list.push_back({{"scene", "scenes/" + s.name}, {"work", "work/" + s.name}, {"settings", {{"knowledge.preset", s.animal}}}});
+  if (broken) {
+    fs::create_directories(file.parent_path() / "scenes" / "broken");
+    spit(file.parent_path() / "scenes" / "broken" / "transforms.json", "{\"frames\": [");
+    list.push_back({{"scene", "scenes/broken"}, {"work", "work/broken"}, {"settings", {{"knowledge.preset", "cat"}}}});
+  }
   spit(file, json{{"defaults", {{"quality", "draft"}, {"settings", kTinySettings}}}, {"scenes", list}}.dump(2));
 }
 
@@ -203,7 +210,7 @@ TEST_CASE("batch, Slurm backend: a job array on a real one-node cluster, one tas
   } stop_cluster{cluster};
 
   const auto scenes = make_scenes(root, count);
-  write_manifest(root / "m.json", scenes);
+  write_manifest(root / "m.json", scenes, true);
   const fs::path batch = root / "m.batch";
   const auto t0 = std::chrono::steady_clock::now();
   std::string timeline;
@@ -220,6 +227,10 @@ TEST_CASE("batch, Slurm backend: a job array on a real one-node cluster, one tas
   const std::string job = m[1].str();
   mark("submitted job array " + job + " (" + std::to_string(count) + " scenes, 2 at a time)");
   CHECK(slurp(batch / "batch.sbatch").find("#SBATCH --requeue") != std::string::npos);
+  // Submitted, so a second submission leaves them alone while they are queued or running.
+  const Result resubmitted = run("batch run " + (root / "m.json").string() + " --backend slurm --max-parallel 2 --cpus-per-task 1", env);
+  CHECK(resubmitted.code == 0);
+  CHECK(resubmitted.output.find("nothing submitted") != std::string::npos);
 
   for (int i = 0; i < 2; ++i)
     REQUIRE_MESSAGE(wait_for(batch / "logs" / (scenes[std::size_t(i)].name + ".log"), "stage fur: running", 300),
@@ -236,7 +247,7 @@ TEST_CASE("batch, Slurm backend: a job array on a real one-node cluster, one tas
   // Slurm holds a requeued job for two minutes before it may start again; the test releases them.
   bool all_done = false;
   std::set<std::string> resumed;
-  while (!all_done && seconds_since(t0) < 900) {
+  while (!all_done && seconds_since(t0) < 600) {
     std::this_thread::sleep_for(std::chrono::seconds(2));
     const std::string pending = shell(env + " squeue -h -t PD -r -o '%i %r'");
     std::istringstream lines(pending);
@@ -248,15 +259,26 @@ TEST_CASE("batch, Slurm backend: a job array on a real one-node cluster, one tas
         mark(s.name + " resumed from its fur checkpoint");
       }
     all_done = true;
-    for (const json& row : status_of(batch, env)) all_done = all_done && row["state"] == "done";
+    for (const json& row : status_of(batch, env)) all_done = all_done && (row["state"] == "done" || row["name"] == "broken");
+    all_done = all_done && shell(env + " squeue -h").empty();
   }
   mark("all done");
   MESSAGE("Slurm timeline:\n", timeline);
   REQUIRE_MESSAGE(all_done, (shell(env + " squeue") + shell("tail -n 30 " + (cluster / "log" / "slurmctld.log").string())));
   const json rows = status_of(batch, env);
+  REQUIRE(rows.size() == scenes.size() + 1);
   CHECK(rows[0]["attempts"] == 2);
   CHECK(rows[1]["attempts"] == 2);
-  for (std::size_t i = 2; i < rows.size(); ++i) CHECK(rows[i]["attempts"] == 1);
+  for (std::size_t i = 2; i < scenes.size(); ++i) CHECK(rows[i]["attempts"] == 1);
+  // Bad input fails once and is not requeued.
+  const json& broken = rows[scenes.size()];
+  CHECK(broken["state"] == "failed");
+  CHECK(broken["attempts"] == 1);
+  CHECK(slurp(batch / "logs" / "broken.log").find("not valid JSON") != std::string::npos);
+  // The task Slurm requeued was stopped by Slurm's SIGTERM, then finished.
+  const std::string log0 = slurp(batch / "logs" / (scenes[0].name + ".log"));
+  CHECK(log0.find("task '" + scenes[0].name + "' stopped") != std::string::npos);
+  CHECK(log0.find("task '" + scenes[0].name + "' done") != std::string::npos);
   CHECK(resumed.count(scenes[0].name) == 1);
   CHECK(resumed.count(scenes[1].name) == 1);
   // The task sent SIGTERM asked Slurm to requeue it; the one requeued by scontrol was stopped by Slurm.

@@ -16,7 +16,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     for (const nf::batch::BatchTask& t : nf::batch::read_manifest(file)) {
       if (t.name.empty() || t.scene.empty() || t.work.empty()) __builtin_trap();
-      (void)nf::batch::reconstruct_arguments(t);
       (void)nf::batch::task_from_json(nf::batch::to_json(t));
     }
   } catch (const nf::Error&) {
