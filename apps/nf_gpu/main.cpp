@@ -622,21 +622,10 @@ int main(int argc, char** argv) {
       render_options.scene = render_scene, render_options.out = render_out;
       return run_render(render_options);
     }
-  } catch (const nf::Interrupted& e) {
-    std::cerr << "nf_gpu: " << e.what() << "\n";
-    return nf::interrupted_exit_code();
-  } catch (const nf::Error& e) {
-    std::cerr << "nf_gpu: error: " << e.what() << "\n";
-    return int(e.code());
-  } catch (const std::filesystem::filesystem_error& e) {
-    // A folder or file the user named cannot be read or written (permissions, a full disk, a file
-    // where a folder should be): bad input, not a bug.
-    std::cerr << "nf_gpu: error: " << (e.path1().empty() ? "" : e.path1().string() + ": ") << e.code().message()
-              << "\n";
-    return int(nf::ExitCode::BadInput);
-  } catch (const std::exception& e) {
-    std::cerr << "nf_gpu: internal error: " << e.what() << "\n";
-    return int(nf::ExitCode::DeviceOrInternal);
+  } catch (const std::exception&) {
+    const nf::Failure f = nf::current_failure();
+    std::cerr << "nf_gpu: " << f.line() << "\n";
+    return f.exit_code;
   }
   return 0;
 }

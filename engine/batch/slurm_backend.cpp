@@ -1,12 +1,13 @@
 #include "engine/batch/slurm_backend.hpp"
 
+#include <fcntl.h>
+#include <poll.h>
+#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <array>
+#include <cerrno>
 #include <cstdio>
-#include <fstream>
-#include <iterator>
 #include <sstream>
 
 #include "engine/core/atomic_file.hpp"
@@ -14,11 +15,71 @@
 #include "engine/core/host.hpp"
 #include "engine/core/text.hpp"
 
+extern char** environ;
+
 namespace nf::batch {
 
 namespace fs = std::filesystem;
 
 namespace {
+
+// One of Slurm's clients run without a shell: its exit status (-1: it could not start, e.g. not
+// installed), standard output and standard error (read together, so neither pipe can fill).
+struct ClientRun {
+  int status = -1;
+  std::string out, err;
+};
+
+ClientRun run_client(const std::vector<std::string>& args) {
+  ClientRun r;
+  int out_pipe[2], err_pipe[2];
+  if (pipe2(out_pipe, O_CLOEXEC) != 0) return r;
+  if (pipe2(err_pipe, O_CLOEXEC) != 0) {
+    close(out_pipe[0]), close(out_pipe[1]);
+    return r;
+  }
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, out_pipe[1], STDOUT_FILENO);
+  posix_spawn_file_actions_adddup2(&actions, err_pipe[1], STDERR_FILENO);
+  std::vector<std::string> words = args;
+  std::vector<char*> argv;
+  for (std::string& w : words) argv.push_back(w.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  const int spawned = posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  close(out_pipe[1]), close(err_pipe[1]);
+  if (spawned == 0) {
+    pollfd fds[2] = {{out_pipe[0], POLLIN, 0}, {err_pipe[0], POLLIN, 0}};
+    std::string* into[2] = {&r.out, &r.err};
+    for (int open_fds = 2; open_fds > 0;) {
+      if (poll(fds, 2, -1) < 0) {
+        if (errno == EINTR) continue;
+        break;
+      }
+      for (int k = 0; k < 2; ++k) {
+        if (fds[k].fd < 0 || !(fds[k].revents & (POLLIN | POLLHUP | POLLERR))) continue;
+        char buf[4096];
+        const ssize_t n = read(fds[k].fd, buf, sizeof buf);
+        if (n > 0) {
+          into[k]->append(buf, std::size_t(n));
+        } else if (n == 0 || errno != EINTR) {
+          close(fds[k].fd);
+          fds[k].fd = -1;
+          --open_fds;
+        }
+      }
+    }
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    r.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  }
+  for (int fd : {out_pipe[0], err_pipe[0]})
+    if (fd >= 0) close(fd);
+  return r;
+}
 
 // "0-3" or "0,2,5": the --array list of these indices.
 std::string array_list(const std::vector<std::size_t>& indices) {
@@ -38,13 +99,16 @@ std::string array_list(const std::vector<std::size_t>& indices) {
 }  // namespace
 
 bool job_in_queue(const std::string& job) {
-  if (job.empty() || job.find_first_not_of("0123456789_") != std::string::npos) return false;
-  FILE* pipe = popen(("squeue -h -o %i -j " + job + " 2>/dev/null").c_str(), "r");
-  if (!pipe) return false;
-  std::array<char, 128> buf{};
-  const bool listed = std::fgets(buf.data(), int(buf.size()), pipe) != nullptr;
-  pclose(pipe);
-  return listed;
+  if (job.empty()) return false;
+  const ClientRun r = run_client({"squeue", "-h", "-o", "%i", "-j", job});
+  return r.status == 0 && !r.out.empty();
+}
+
+std::string requeue_job(const std::string& job) {
+  const ClientRun r = run_client({"scontrol", "requeue", job});
+  if (r.status == -1) return "scontrol was not found";
+  if (r.status != 0) return "scontrol requeue " + job + " failed: " + shorten(r.err, 300);
+  return "";
 }
 
 std::vector<std::size_t> tasks_to_submit(const BatchFolder& folder, const std::vector<BatchTask>& tasks, bool rerun_done) {
@@ -105,26 +169,18 @@ std::string submit(const BatchFolder& folder, const std::string& script, const s
     s.message.clear();
     folder.write_state(tasks[i].name, s);
   }
-  // The job id is sbatch's standard output; its warnings and errors go to a file of their own.
-  const fs::path errors = folder.dir() / "logs" / "sbatch.err";
-  const std::string command = "sbatch --parsable " + shell_quote(folder.sbatch_script().string()) + " 2>" + shell_quote(errors.string());
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) throw InputError("cannot run sbatch: is Slurm installed here (`sbatch` on PATH)?");
-  std::string out;
-  std::array<char, 256> buf{};
-  while (std::fgets(buf.data(), int(buf.size()), pipe)) out += buf.data();
-  const int status = pclose(pipe);
+  // The job id is sbatch's standard output; its warnings go to standard error.
+  const ClientRun r = run_client({"sbatch", "--parsable", folder.sbatch_script().string()});
+  if (r.status == -1) throw InputError("sbatch was not found: is Slurm installed here?");
+  std::string out = r.out;
   while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
-  std::ifstream err_in(errors);
-  const std::string said((std::istreambuf_iterator<char>(err_in)), std::istreambuf_iterator<char>());
-  if (status != 0 || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    if (WIFEXITED(status) && WEXITSTATUS(status) == 127) throw InputError("sbatch was not found: is Slurm installed here?");
-    throw InputError("sbatch refused the job (" + folder.sbatch_script().string() + "): " + shorten(said.empty() ? out : said, 600));
-  }
+  if (r.status != 0)
+    throw InputError("sbatch refused the job (" + folder.sbatch_script().string() + "): " + shorten(r.err.empty() ? out : r.err, 600));
+  if (!r.err.empty()) std::fprintf(stderr, "%s", r.err.c_str());  // its warnings, for the user
   // --parsable prints "jobid" or "jobid;cluster".
   const std::string job = out.substr(0, out.find(';'));
   if (job.empty() || job.find_first_not_of("0123456789") != std::string::npos)
-    throw InputError("sbatch answered '" + shorten(out, 200) + "' where a job id was expected (" + errors.string() + ")");
+    throw InputError("sbatch answered '" + shorten(out, 200) + "' where a job id was expected");
   folder.add_submission({{"job", job}, {"tasks", indices.size()}, {"submitted", utc_now()}, {"host", host_name()}});
   for (const std::size_t i : indices) {
     TaskState s = folder.state(tasks[i].name);

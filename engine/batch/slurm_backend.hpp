@@ -29,6 +29,9 @@ std::vector<std::size_t> tasks_to_submit(const BatchFolder& folder, const std::v
 // Whether squeue lists this job ("123" or "123_4").
 bool job_in_queue(const std::string& job);
 
+// `scontrol requeue JOB`: "" or what went wrong (Slurm's own words).
+std::string requeue_job(const std::string& job);
+
 // The job script running these indices of `tasks` from the batch folder `dir` with the binary
 // `nf_gpu` (empty: nothing to submit). InputError for a folder whose path has a blank (#SBATCH lines
 // cannot quote it).

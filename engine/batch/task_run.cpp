@@ -1,8 +1,6 @@
 #include "engine/batch/task_run.hpp"
 
 #include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cctype>
@@ -12,6 +10,7 @@
 #include <cstring>
 
 #include "engine/batch/local_backend.hpp"
+#include "engine/batch/slurm_backend.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/host.hpp"
 #include "engine/core/interrupt.hpp"
@@ -19,7 +18,6 @@
 #include "engine/pipeline/stages.hpp"
 #include "engine/pipeline/work_lock.hpp"
 
-extern char** environ;
 
 namespace nf::batch {
 
@@ -42,21 +40,6 @@ void redirect_output(const fs::path& log) {
   dup2(fd, STDOUT_FILENO);
   dup2(fd, STDERR_FILENO);
   close(fd);
-}
-
-// Runs `scontrol requeue JOB`; returns "" or what went wrong.
-std::string requeue(const std::string& job) {
-  std::vector<std::string> args{"scontrol", "requeue", job};
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  if (posix_spawnp(&pid, "scontrol", nullptr, nullptr, argv.data(), environ) != 0) return "scontrol was not found";
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0)
-    if (errno != EINTR) return "waiting for scontrol failed";
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) return "scontrol requeue " + job + " failed (see the log)";
-  return "";
 }
 
 // Under Slurm: the GPU and cores the job was given, for a task that was not told otherwise.
@@ -147,21 +130,12 @@ int run_task(const BatchFolder& folder, const std::string& name, const TaskRunOp
       const auto outcomes = pipeline::reconstruct(context, o);
       for (const auto& out : outcomes)
         std::printf("%-10s %s\n", out.name.c_str(), out.ran ? ("ran in " + std::to_string(out.seconds) + " s").c_str() : "unchanged, skipped");
-    } catch (const Interrupted& e) {
-      code = interrupted_exit_code();
-      message = e.what();
     } catch (const pipeline::WorkBusyError& e) {
       busy = e.what();  // lost the race for the lock after the check above
-    } catch (const Error& e) {
-      code = int(e.code());
-      message = e.what();
-    } catch (const fs::filesystem_error& e) {
-      // As `nf_gpu reconstruct` reports it: a folder or file that cannot be read or written.
-      code = int(ExitCode::BadInput);
-      message = (e.path1().empty() ? "" : e.path1().string() + ": ") + e.code().message();
-    } catch (const std::exception& e) {
-      code = int(ExitCode::DeviceOrInternal);
-      message = std::string("internal error: ") + e.what();
+    } catch (const std::exception&) {
+      const Failure f = current_failure();  // classified as `nf_gpu reconstruct` reports it
+      code = f.exit_code;
+      message = f.line();
     }
   }
   // From here on a signal must not cut the filing short: Slurm's own SIGTERM follows a requeue.
@@ -180,7 +154,7 @@ int run_task(const BatchFolder& folder, const std::string& name, const TaskRunOp
   }
   if (!message.empty()) std::fprintf(stderr, "nf_gpu: %s\n", message.c_str());
 
-  const bool retryable = !busy.empty() || verdict_of(code, message).retryable;
+  const bool retryable = !busy.empty() || verdict_of(code, message).retryable;  // busy: try again later
   if (retryable && !job.empty()) {
     // SLURM_RESTART_COUNT counts this job's requeues, whoever asked for them.
     const int restarts = std::atoi(env("SLURM_RESTART_COUNT").c_str());
@@ -196,7 +170,7 @@ int run_task(const BatchFolder& folder, const std::string& name, const TaskRunOp
         s.state = "requeued";
         folder.write_state(name, s);
       }
-      if (const std::string why = requeue(job); !why.empty()) {
+      if (const std::string why = requeue_job(job); !why.empty()) {
         // Slurm refuses when it is requeueing the job already (scontrol requeue, preemption): then
         // it runs again anyway.
         s = filed;

@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <csignal>
+#include <filesystem>
 
 namespace nf {
 namespace {
@@ -43,6 +44,20 @@ void stop_if_interrupted(const std::string& what) {
   if (interrupted())
     throw Interrupted(what + ": stopped on request; no partial file is left, but files this run had finished may sit beside an earlier "
                       "run's: run the command again to complete it");
+}
+
+Failure current_failure() {
+  try {
+    throw;
+  } catch (const Interrupted& e) {
+    return {interrupted_exit_code(), "", e.what()};
+  } catch (const Error& e) {
+    return {int(e.code()), "error", e.what()};
+  } catch (const std::filesystem::filesystem_error& e) {
+    return {int(ExitCode::BadInput), "error", (e.path1().empty() ? "" : e.path1().string() + ": ") + e.code().message()};
+  } catch (const std::exception& e) {
+    return {int(ExitCode::DeviceOrInternal), "internal error", e.what()};
+  }
 }
 
 void ignore_file_size_signal() {

@@ -26,6 +26,19 @@ class Interrupted : public Error {
   explicit Interrupted(const std::string& message) : Error(ExitCode::Interrupted, message) {}
 };
 
+// How a command that threw ends: its exit code and its line for the user, the same for every
+// exception wherever it is caught (the CLI, a batch task). `kind` is "" for a stop on request,
+// "error" for bad input, usage, the device and filesystem errors (a folder or file the user named
+// that cannot be read or written is bad input, not a bug), "internal error" for anything else.
+struct Failure {
+  int exit_code;
+  std::string kind;
+  std::string message;
+  std::string line() const { return kind.empty() ? message : kind + ": " + message; }
+};
+// Call inside a catch block (it rethrows the current exception to classify it).
+Failure current_failure();
+
 // Throws Interrupted("<what>: stopped; ...") when a stop was asked: for work with nothing to resume
 // (edit, pose, export), whose writers remove their partial files as the exception passes.
 void stop_if_interrupted(const std::string& what);

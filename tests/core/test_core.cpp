@@ -80,6 +80,42 @@ TEST_CASE("errors carry the exit code of their kind") {
   CHECK_THROWS_WITH_AS(NF_CHECK(1 + 1 == 3, "arithmetic"), doctest::Contains("arithmetic"), InternalError);
 }
 
+TEST_CASE("a failure is classified alike wherever it is caught: exit code, kind, message") {
+  const auto failure_of = [](auto thrower) {
+    try {
+      thrower();
+    } catch (const std::exception&) {
+      return nf::current_failure();
+    }
+    return nf::Failure{0, "", ""};
+  };
+  const nf::Failure input = failure_of([] { throw nf::InputError("scene.json: bad"); });
+  CHECK(input.exit_code == 1);
+  CHECK(input.line() == "error: scene.json: bad");
+  const nf::Failure usage = failure_of([] { throw nf::UsageError("no --out"); });
+  CHECK(usage.exit_code == 2);
+  const nf::Failure disk = failure_of([] {
+    throw std::filesystem::filesystem_error("cannot", "/work/x", std::make_error_code(std::errc::permission_denied));
+  });
+  CHECK(disk.exit_code == 1);
+  CHECK(disk.line().rfind("error: /work/x: ", 0) == 0);
+  const nf::Failure bug = failure_of([] { throw std::runtime_error("oops"); });
+  CHECK(bug.exit_code == 3);
+  CHECK(bug.line() == "internal error: oops");
+  nf::set_interrupted(true);
+  const nf::Failure stop = failure_of([] { throw nf::Interrupted("fur: stopped"); });
+  nf::set_interrupted(false);
+  CHECK(stop.exit_code == 130);
+  CHECK(stop.line() == "fur: stopped");
+}
+
+TEST_CASE("shell words: safe ones as they are, others single-quoted") {
+  CHECK(nf::shell_quote("/tmp/a-b_c.d=1,2:3@4%5+6") == "/tmp/a-b_c.d=1,2:3@4%5+6");
+  CHECK(nf::shell_quote("my cat") == "'my cat'");
+  CHECK(nf::shell_quote("it's") == "'it'\\''s'");
+  CHECK(nf::shell_quote("") == "''");
+}
+
 TEST_CASE("content hashes: equal bytes hash equal, one changed byte changes the hash, unreadable files are named") {
   namespace fs = std::filesystem;
   const fs::path dir = fs::temp_directory_path() / "nf_core_hash";
