@@ -15,6 +15,7 @@
 #include "engine/fur/strand_losses.hpp"
 #include "engine/gpu/context.hpp"
 #include "engine/nn/adam.hpp"
+#include "engine/nn/training_checkpoint.hpp"
 #include "engine/nn/weights_io.hpp"
 #include "engine/splat/image_losses.hpp"
 #include "engine/splat/rasterizer.hpp"
@@ -433,8 +434,7 @@ FurStepReport FurTrainer::train(std::uint32_t until, const std::filesystem::path
     last_ = report;
     if (step_ == options_.warm_steps) warm_ = state();
     if (step_ % kHistoryEvery == 0 || step_ == until || step_ == options_.warm_steps) history_.push_back(report);
-    if (!checkpoint.empty() && options_.checkpoint_interval > 0 && (step_ % options_.checkpoint_interval == 0 || step_ == until))
-      save_checkpoint(checkpoint);
+    if (!checkpoint.empty() && nn::checkpoint_due(step_, until, options_.checkpoint_interval)) save_checkpoint(checkpoint);
     if (after_step && !after_step(report)) break;
   }
   return report;
@@ -507,12 +507,16 @@ ViewScore score_view(const FurView& view, const std::vector<float>& img) {
   return s;
 }
 
+namespace {
+nn::CheckpointIdentity checkpoint_identity(const FurFieldConfig& field, const FurTrainingOptions& options) {
+  return {"fur checkpoint", kCheckpointVersion, field.to_json(), to_json(options)};
+}
+}  // namespace
+
 void FurTrainer::save_checkpoint(const std::filesystem::path& path) const {
-  nn::WeightsFile file;
-  file.config = {{"kind", "fur checkpoint"},   {"version", kCheckpointVersion}, {"field", field_config_.to_json()},
-                 {"options", to_json(options_)}, {"step", step_},                 {"seconds", seconds_},
-                 {"last", to_json(last_)},       {"history", json::array()}};
-  for (const FurStepReport& r : history_) file.config["history"].push_back(to_json(r));
+  json history = json::array();
+  for (const FurStepReport& r : history_) history.push_back(to_json(r));
+  nn::WeightsFile file = nn::checkpoint_file(checkpoint_identity(field_config_, options_), {step_, seconds_, to_json(last_), std::move(history)});
   std::vector<float> p = field_->parameters();
   file.tensors.push_back({"field", {p.size()}, std::move(p)});
   nn::add_state_tensors(impl_->adam->save_state(), "adam.field", file);
@@ -562,12 +566,12 @@ FurCheckpointState parse_fur_checkpoint(const nn::WeightsFile& file, const std::
   s.length_raw = file.tensor("length.raw", path).values;
   s.length_m = file.tensor("length.m", path).values;
   s.length_v = file.tensor("length.v", path).values;
+  const nn::CheckpointProgress progress = nn::checkpoint_progress(file, path);
+  s.step = progress.step, s.seconds = progress.seconds;
   try {
     const json& c = file.config;
-    s.step = c.at("step").get<std::uint32_t>();
-    s.seconds = c.at("seconds").get<double>();
-    s.last = report_from_json(c.at("last"));
-    for (const json& r : c.at("history")) s.history.push_back(report_from_json(r));
+    s.last = report_from_json(progress.last);
+    for (const json& r : progress.history) s.history.push_back(report_from_json(r));
     s.length_steps = c.at("length_steps").get<std::uint32_t>();
     if (c.contains("warm_step"))
       s.warm = FurFieldState{file.tensor("warm.field", path).values, file.tensor("warm.length_factors", path).values, c.at("warm_step").get<std::uint32_t>()};
@@ -578,13 +582,9 @@ FurCheckpointState parse_fur_checkpoint(const nn::WeightsFile& file, const std::
 }
 
 bool FurTrainer::load_checkpoint(const std::filesystem::path& path) {
-  const nn::WeightsFile file = nn::load_weights(path);
-  const json& c = file.config;
-  if (!c.is_object() || c.value("kind", json()) != "fur checkpoint") throw InputError(path.string() + ": not a fur checkpoint");
-  if (c.value("version", json()) != kCheckpointVersion || c.value("field", json()) != field_config_.to_json() ||
-      c.value("options", json()) != to_json(options_))
-    return false;
-  FurCheckpointState s = parse_fur_checkpoint(file, path, impl_->adam_decoder != nullptr);
+  const std::optional<nn::WeightsFile> file = nn::load_checkpoint_of(path, checkpoint_identity(field_config_, options_));
+  if (!file) return false;
+  FurCheckpointState s = parse_fur_checkpoint(*file, path, impl_->adam_decoder != nullptr);
   if (s.field.size() != field_->mlp().parameters().size())
     throw InputError(path.string() + ": the field has " + std::to_string(s.field.size()) + " parameters, this network " +
                      std::to_string(field_->mlp().parameters().size()));

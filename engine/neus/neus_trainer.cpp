@@ -16,13 +16,14 @@
 #include "engine/io/image.hpp"
 #include "engine/io/mask_agreement.hpp"
 #include "engine/io/view_split.hpp"
+#include "engine/nn/training_checkpoint.hpp"
 #include "engine/nn/weights_io.hpp"
 
 namespace nf::neus {
 namespace {
 
 constexpr float kInvSMin = 1e-6f, kInvSMax = 1e6f;  // NeuS: inv_s = exp(10 v), clipped
-constexpr std::uint32_t kCheckpointVersion = 1;
+constexpr int kCheckpointVersion = 1;
 
 std::uint64_t mix(std::uint64_t a, std::uint64_t b) {
   return mix64(a * kGoldenGamma ^ (b + 0x632BE59BD9B4E019ull) * 0xD1B54A32D192ED03ull);
@@ -524,27 +525,24 @@ NeusStepReport NeusTrainer::train(std::uint32_t until, const std::filesystem::pa
       seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     }
     report = train_step();
-    if (!checkpoint.empty() && options_.checkpoint_interval > 0 &&
-        (step_ % options_.checkpoint_interval == 0 || step_ == until))
-      save_checkpoint(checkpoint);
+    if (!checkpoint.empty() && nn::checkpoint_due(step_, until, options_.checkpoint_interval)) save_checkpoint(checkpoint);
     if (after_step && !after_step(report)) break;
   }
   return report;
 }
 
+namespace {
+nn::CheckpointIdentity checkpoint_identity(const NeusFieldConfig& field, const NeusTrainingOptions& options) {
+  return {"neus checkpoint", kCheckpointVersion, to_json(field), to_json(options)};
+}
+}  // namespace
+
 void NeusTrainer::save_checkpoint(const std::filesystem::path& path) const {
-  nn::WeightsFile file;
-  file.config = {{"kind", "neus checkpoint"},
-                 {"version", kCheckpointVersion},
-                 {"field", to_json(field_config_)},
-                 {"options", to_json(options_)},
-                 {"step", step_},
-                 {"seconds", seconds_},
-                 {"variance", variance_},
-                 {"variance_adam", {variance_m_, variance_v_, variance_t_}},
-                 {"last", to_json(last_)},
-                 {"history", json::array()}};
-  for (const NeusStepReport& r : history_) file.config["history"].push_back(to_json(r));
+  json history = json::array();
+  for (const NeusStepReport& r : history_) history.push_back(to_json(r));
+  nn::WeightsFile file = nn::checkpoint_file(checkpoint_identity(field_config_, options_), {step_, seconds_, to_json(last_), std::move(history)});
+  file.config["variance"] = variance_;
+  file.config["variance_adam"] = {variance_m_, variance_v_, variance_t_};
   const auto add = [&](const std::string& name, std::vector<float> values) {
     const std::uint64_t count = values.size();
     file.tensors.push_back({name, {count}, std::move(values)});
@@ -568,16 +566,16 @@ NeusCheckpointState parse_neus_checkpoint(const nn::WeightsFile& file, const std
   if (has_table) s.table_adam = adam_state("adam.hash_table");
   s.sdf_adam = adam_state("adam.sdf"), s.colour_adam = adam_state("adam.colour");
   s.occupancy = file.tensor("occupancy", path).values;
+  const nn::CheckpointProgress progress = nn::checkpoint_progress(file, path);
+  s.step = progress.step, s.seconds = progress.seconds;
   try {
     const json& c = file.config;
-    s.step = c.at("step").get<std::uint32_t>();
-    s.seconds = c.at("seconds").get<double>();
     s.variance = c.at("variance").get<double>();
     s.variance_m = c.at("variance_adam").at(0).get<double>();
     s.variance_v = c.at("variance_adam").at(1).get<double>();
     s.variance_t = c.at("variance_adam").at(2).get<std::uint32_t>();
-    s.last = step_report_from_json(c.at("last"));
-    for (const json& r : c.at("history")) s.history.push_back(step_report_from_json(r));
+    s.last = step_report_from_json(progress.last);
+    for (const json& r : progress.history) s.history.push_back(step_report_from_json(r));
   } catch (const json::exception& e) {
     throw InputError(path.string() + ": " + e.what());
   }
@@ -585,15 +583,10 @@ NeusCheckpointState parse_neus_checkpoint(const nn::WeightsFile& file, const std
 }
 
 bool NeusTrainer::load_checkpoint(const std::filesystem::path& path) {
-  const nn::WeightsFile file = nn::load_weights(path);
-  const json& c = file.config;
-  if (!c.is_object() || c.value("kind", json()) != "neus checkpoint")
-    throw InputError(path.string() + ": not a neus checkpoint");
-  if (c.value("version", json()) != kCheckpointVersion || c.value("field", json()) != to_json(field_config_) ||
-      c.value("options", json()) != to_json(options_))
-    return false;
+  const std::optional<nn::WeightsFile> file = nn::load_checkpoint_of(path, checkpoint_identity(field_config_, options_));
+  if (!file) return false;
   // Everything is read and checked before anything is applied.
-  NeusCheckpointState s = parse_neus_checkpoint(file, path, adam_table_ != nullptr);
+  NeusCheckpointState s = parse_neus_checkpoint(*file, path, adam_table_ != nullptr);
   if (s.occupancy.size() != occupancy_.occupied.size())
     throw InputError(path.string() + ": the occupancy grid has " + std::to_string(s.occupancy.size()) + " cells, the scene's " +
                      std::to_string(occupancy_.occupied.size()));

@@ -1,4 +1,5 @@
-// The weights format: round trips, and malformed files rejected with the file and field named.
+// The weights format: round trips, and malformed files rejected with the file and field named; the
+// trainers' shared checkpoint skeleton.
 #include <doctest/doctest.h>
 
 #include <filesystem>
@@ -8,6 +9,7 @@
 #include "engine/core/error.hpp"
 #include "tests/support/files.hpp"
 #include "engine/nn/init.hpp"
+#include "engine/nn/training_checkpoint.hpp"
 #include "engine/nn/weights_io.hpp"
 
 using namespace nf;
@@ -83,4 +85,51 @@ TEST_CASE("malformed weights files name the file and the problem") {
                        InputError);
   fs::remove(path);
   CHECK_THROWS_WITH_AS(load_weights(path), doctest::Contains("cannot open"), InputError);
+}
+
+TEST_CASE("a trainer's checkpoint is resumed only by the same kind, version, network and options") {
+  const fs::path dir = fs::temp_directory_path() / "nf_training_checkpoint";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const CheckpointIdentity id{"toy checkpoint", 3, {{"width", 8}}, {{"lr", 0.01}}};
+  WeightsFile file = checkpoint_file(id, {42, 1.5, {{"loss", 0.25}}, json::array({{{"loss", 1.0}}, {{"loss", 0.5}}})});
+  file.config["extra"] = 7;
+  file.tensors.push_back({"field", {3}, {1.f, 2.f, 3.f}});
+  save_weights(dir / "a.nfwt", file);
+
+  const std::optional<WeightsFile> same = load_checkpoint_of(dir / "a.nfwt", id);
+  REQUIRE(same.has_value());
+  CHECK(same->config["extra"] == 7);
+  CHECK(same->tensor("field", dir / "a.nfwt").values == std::vector<float>{1.f, 2.f, 3.f});
+  const CheckpointProgress progress = checkpoint_progress(*same, dir / "a.nfwt");
+  CHECK(progress.step == 42);
+  CHECK(progress.seconds == 1.5);
+  CHECK(progress.last["loss"] == 0.25);
+  CHECK(progress.history.size() == 2);
+
+  // Other settings: not resumed (the stage starts afresh); another kind: refused, naming the file.
+  CheckpointIdentity other = id;
+  other.version = 4;
+  CHECK_FALSE(load_checkpoint_of(dir / "a.nfwt", other).has_value());
+  other = id, other.field["width"] = 16;
+  CHECK_FALSE(load_checkpoint_of(dir / "a.nfwt", other).has_value());
+  other = id, other.options["lr"] = 0.02;
+  CHECK_FALSE(load_checkpoint_of(dir / "a.nfwt", other).has_value());
+  CheckpointIdentity fur = id;
+  fur.kind = "fur checkpoint";
+  CHECK_THROWS_WITH_AS(load_checkpoint_of(dir / "a.nfwt", fur), doctest::Contains("a.nfwt: not a fur checkpoint"), InputError);
+
+  WeightsFile broken = file;
+  broken.config["step"] = "many";
+  CHECK_THROWS_WITH_AS(checkpoint_progress(broken, dir / "b.nfwt"), doctest::Contains("b.nfwt"), InputError);
+  broken = file;
+  broken.config["history"] = 3;
+  CHECK_THROWS_WITH_AS(checkpoint_progress(broken, dir / "b.nfwt"), doctest::Contains("'history' is not an array"), InputError);
+
+  // Saved every interval and at the run's end; never with interval 0.
+  CHECK(checkpoint_due(100, 300, 100));
+  CHECK_FALSE(checkpoint_due(101, 300, 100));
+  CHECK(checkpoint_due(57, 57, 100));
+  CHECK_FALSE(checkpoint_due(57, 57, 0));
+  fs::remove_all(dir);
 }
