@@ -16,6 +16,7 @@
 #include "engine/core/text.hpp"
 #include "engine/core/json.hpp"
 #include "engine/core/log.hpp"
+#include "engine/fur/prior_evaluation.hpp"
 #include "engine/fur/prior_training.hpp"
 #include "engine/gpu/context.hpp"
 #include "engine/gradcheck/catalog.hpp"

@@ -10,6 +10,7 @@
 #include <random>
 
 #include "engine/core/error.hpp"
+#include "engine/fur/prior_evaluation.hpp"
 #include "engine/fur/prior_training.hpp"
 #include "engine/fur/strand_prior.hpp"
 #include "engine/fur/strand_shapes.hpp"
