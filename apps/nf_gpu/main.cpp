@@ -475,8 +475,7 @@ int main(int argc, char** argv) {
   reconstruct->add_option("--to", reconstruct_options.run.to, "run only this stage and the stages it depends on");
   reconstruct->add_option("--set", reconstruct_options.settings, "override a stage setting: stage.key=value (repeatable)");
   reconstruct->add_flag("--json", reconstruct_json, "machine-readable summary");
-  double scene_scale = 0;
-  reconstruct->add_option("--scene-scale", scene_scale, "the scene's unit in cm (overrides the scene file and the eyes)")
+  reconstruct->add_option("--scene-scale", reconstruct_options.scene_scale, "the scene's unit in cm (overrides the scene file and the eyes)")
       ->check(CLI::PositiveNumber);
   reconstruct->add_option("--help-stage", help_stage, "print the settings of this stage and exit");
   reconstruct->add_flag("--markdown", help_markdown, "with --help-stage: a markdown table");
@@ -484,7 +483,6 @@ int main(int argc, char** argv) {
   nf::pipeline::ReconstructOptions annotate_options;
   std::string annotate_scene, annotate_out;
   bool annotate_json = false;
-  double annotate_scale = 0;
   auto* annotate = app.add_subcommand("annotate", "the knowledge stage (and what it needs): fur per region from a VLM, a preset or a file");
   annotate->add_option("--scene", annotate_scene, "scene folder or transforms.json")->required();
   annotate->add_option("--out", annotate_out, "WORK folder (shared with reconstruct)")->required();
@@ -492,7 +490,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember(nf::pipeline::quality_names()));
   annotate->add_option("--set", annotate_options.settings,
                        "stage.key=value, e.g. knowledge.preset=cat, or knowledge.vlm=URL knowledge.model=NAME (repeatable)");
-  annotate->add_option("--scene-scale", annotate_scale, "the scene's unit in cm (overrides the scene file and the eyes)")
+  annotate->add_option("--scene-scale", annotate_options.scene_scale, "the scene's unit in cm (overrides the scene file and the eyes)")
       ->check(CLI::PositiveNumber);
   annotate->add_flag("--json", annotate_json, "machine-readable output");
 
@@ -590,13 +588,11 @@ int main(int argc, char** argv) {
         throw nf::UsageError("reconstruct needs --scene and --out (nf_gpu reconstruct --help)");
       reconstruct_options.scene = reconstruct_scene, reconstruct_options.work = reconstruct_out;
       reconstruct_options.run.quality_named = reconstruct_quality->count() > 0;
-      if (scene_scale > 0) reconstruct_options.settings.push_back("knowledge.cm_per_unit=" + json(scene_scale).dump());
       return run_reconstruct(reconstruct_options, reconstruct_json, profile, quoted_command_line(argc, argv));
     }
     if (*annotate) {
       annotate_options.scene = annotate_scene, annotate_options.work = annotate_out, annotate_options.run.to = "knowledge";
       annotate_options.run.quality_named = annotate_quality->count() > 0;
-      if (annotate_scale > 0) annotate_options.settings.push_back("knowledge.cm_per_unit=" + json(annotate_scale).dump());
       return run_annotate(annotate_options, annotate_json, quoted_command_line(argc, argv));
     }
     if (*train_prior) {

@@ -219,6 +219,7 @@ std::vector<BatchTask> read_manifest(const fs::path& file) {
     o.work = t.work;
     o.quality = t.quality;
     o.settings = t.settings;
+    o.scene_scale = t.scene_scale;
     try {
       (void)pipeline::check_reconstruct_options(o);
     } catch (const Error& e) {

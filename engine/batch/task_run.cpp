@@ -125,7 +125,7 @@ int run_task(const BatchFolder& folder, const std::string& name, const TaskRunOp
       o.work = task.work;
       o.quality = task.quality;
       o.settings = task.settings;
-      if (task.scene_scale > 0) o.settings.push_back("knowledge.cm_per_unit=" + json(task.scene_scale).dump());
+      o.scene_scale = task.scene_scale;
       gpu::Context context;
       const auto outcomes = pipeline::reconstruct(context, o);
       for (const auto& out : outcomes)

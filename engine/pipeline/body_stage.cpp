@@ -26,10 +26,6 @@ namespace {
 
 constexpr int kStageVersion = 4;  // 2: fit.json; 3: the head-and-body length; 4: the eyes from the photos
 
-BodySettings settings_of(const StageContext& c) {
-  return body_settings().resolve(c.quality, c.settings.value("body", json::object()));
-}
-
 // The cameras' mean up vector when they agree on one (a capture rig's usual case).
 body::FrameHints frame_hints(const io::Scene& scene) {
   glm::dvec3 sum(0.0);
@@ -182,8 +178,8 @@ std::vector<fs::path> BodyStage::inputs(const StageContext& c) const {
 json BodyStage::parameters(const StageContext& c) const {
   json cams = json::array();
   for (const io::Camera& cam : c.scene.cameras) cams.push_back(json_vec3(glm::dvec3(cam.camera_to_world[1])));
-  json key{{"stage_version", kStageVersion}, {"settings", body_settings().values(c.quality, c.settings.value("body", json::object()))},
-           {"camera_ups", cams}};
+  json key = key_of(c, kStageVersion);
+  key["camera_ups"] = cams;
   if (settings_of(c).photo_eyes) key["cameras"] = cameras_json(c.scene);  // the eyes are triangulated through them
   return key;
 }

@@ -48,12 +48,11 @@ const SettingsSchema<BodySettings>& body_settings();
 // The body model a run's settings name (the built-in family or a SMAL file).
 body::BodyModel body_model_of(const BodySettings& settings);
 
-class BodyStage : public Stage {
+class BodyStage : public SettingsStage<BodySettings> {
  public:
-  std::string name() const override { return "body"; }
+  BodyStage() : SettingsStage(body_settings()) {}
   std::vector<std::string> memory_settings() const override { return {"samples"}; }
   std::vector<std::string> depends_on() const override { return {"neus"}; }
-  const StageSettings& settings() const override { return body_settings(); }
   std::vector<std::filesystem::path> inputs(const StageContext& context) const override;
   json parameters(const StageContext& context) const override;
   json run(StageContext& context, const std::filesystem::path& out, const std::filesystem::path& resume) override;

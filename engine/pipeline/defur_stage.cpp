@@ -30,10 +30,6 @@ namespace {
 
 constexpr int kStageVersion = 2;  // 2: the knowledge's mane labelled on M_NeuS and M_bald
 
-DefurSettings settings_of(const StageContext& c) {
-  return defur_settings().resolve(c.quality, c.settings.value("defur", json::object()));
-}
-
 // The bald body's grid for the penetration loss: spacing half the fur's median thickness, so a
 // strand point sunk by a fraction of the fur layer is resolved, within 64..256 samples along the
 // longest side (128 when nothing has thickness).
@@ -107,7 +103,7 @@ std::vector<fs::path> DefurStage::inputs(const StageContext& c) const {
   const BodyOutputs body = body_outputs(c.work);
   const KnowledgeOutputs k = knowledge_outputs(c.work);
   std::vector<fs::path> files{body.outer_regions(), body.fitted(), body.fit_state(), k.knowledge(), k.directions_world(), k.scale()};
-  const BodySettings b = body_settings().resolve(c.quality, c.settings.value("body", json::object()));
+  const BodySettings b = resolve_settings(body_settings(), c);
   if (!b.model.empty()) files.push_back(b.model);
   if (const auto gt = io::find_ground_truth(c.scene_dir))
     if (fs::exists(gt->bald())) files.push_back(gt->bald());
@@ -115,10 +111,10 @@ std::vector<fs::path> DefurStage::inputs(const StageContext& c) const {
 }
 
 json DefurStage::parameters(const StageContext& c) const {
-  return {{"stage_version", kStageVersion},
-          {"settings", defur_settings().values(c.quality, c.settings.value("defur", json::object()))},
-          {"body", body_settings().values(c.quality, c.settings.value("body", json::object()))},  // the re-fit's schedule
-          {"cameras", cameras_json(c.scene)}};
+  json key = key_of(c, kStageVersion);
+  key["body"] = settings_values(body_settings(), c);  // the re-fit's schedule
+  key["cameras"] = cameras_json(c.scene);
+  return key;
 }
 
 json DefurStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) {
@@ -136,7 +132,7 @@ json DefurStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) 
   seconds["read"] = t.seconds();
 
   t.restart();
-  const BodySettings b = body_settings().resolve(c.quality, c.settings.value("body", json::object()));
+  const BodySettings b = resolve_settings(body_settings(), c);
   const body::BodyModel model = body_model_of(b);
   const body::BodyFit fit = read_body_fit(body_files, model);
   const bool has_mane = knowledge.grows_fur(body::Region::mane);

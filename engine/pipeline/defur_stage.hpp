@@ -32,12 +32,11 @@ struct DefurSettings {
 };
 const SettingsSchema<DefurSettings>& defur_settings();
 
-class DefurStage : public Stage {
+class DefurStage : public SettingsStage<DefurSettings> {
  public:
-  std::string name() const override { return "defur"; }
+  DefurStage() : SettingsStage(defur_settings()) {}
   std::vector<std::string> memory_settings() const override { return {"resolution", "sdf_resolution", "faces"}; }
   std::vector<std::string> depends_on() const override { return {"body", "knowledge"}; }
-  const StageSettings& settings() const override { return defur_settings(); }
   std::vector<std::filesystem::path> inputs(const StageContext& context) const override;
   json parameters(const StageContext& context) const override;
   json run(StageContext& context, const std::filesystem::path& out, const std::filesystem::path& resume) override;

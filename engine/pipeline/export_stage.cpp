@@ -109,21 +109,21 @@ std::vector<fs::path> ExportStage::inputs(const StageContext& c) const {
   std::vector<fs::path> files{f.strands(), f.regions(), f.metrics(), defur_outputs(c.work).bald(), b.fit_state(), b.animal_frame(),
                               knowledge_outputs(c.work).knowledge(), knowledge_outputs(c.work).scale()};
   if (fs::exists(f.roots())) files.push_back(f.roots());
-  const std::string model = body_settings().resolve(c.quality, c.settings.value("body", json::object())).model;
+  const std::string model = resolve_settings(body_settings(), c).model;
   if (!model.empty()) files.push_back(model);
   return files;
 }
 
 json ExportStage::parameters(const StageContext& c) const {
-  return {{"stage_version", kStageVersion},
-          {"settings", export_settings().values(c.quality, c.settings.value("export", json::object()))},
-          {"body_model", body_settings().values(c.quality, c.settings.value("body", json::object())).value("model", "")},
-          {"hold_out_every", fur_settings().resolve(c.quality, c.settings.value("fur", json::object())).hold_out_every}};
+  json key = key_of(c, kStageVersion);
+  key["body_model"] = resolve_settings(body_settings(), c).model;
+  key["hold_out_every"] = resolve_settings(fur_settings(), c).hold_out_every;
+  return key;
 }
 
 json ExportStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) {
-  const ExportOptions o = export_settings().resolve(c.quality, c.settings.value("export", json::object()));
-  const body::BodyModel model = body_model_of(body_settings().resolve(c.quality, c.settings.value("body", json::object())));
+  const ExportOptions o = resolve_settings(export_settings(), c);
+  const body::BodyModel model = body_model_of(resolve_settings(body_settings(), c));
   const BodyOutputs b = body_outputs(c.work);
   const body::BodyFit fit = read_body_fit(b, model);
   const geometry::Mesh bald = io::read_mesh(defur_outputs(c.work).bald());
@@ -139,7 +139,7 @@ json ExportStage::run(StageContext& c, const fs::path& out_dir, const fs::path&)
   scene.skeleton = &skeleton;
   scene.hair_diameter_mm = exporter::region_hair_diameter_mm(knowledge, {});
   scene.scene = &c.scene;
-  const int every = fur_settings().resolve(c.quality, c.settings.value("fur", json::object())).hold_out_every;
+  const int every = resolve_settings(fur_settings(), c).hold_out_every;
   for (std::uint32_t v = 0; v < c.scene.cameras.size(); ++v)
     if (io::is_held_out(v, every)) scene.compare_cameras.push_back(v);
   if (scene.compare_cameras.empty() && !c.scene.cameras.empty()) scene.compare_cameras.push_back(0);

@@ -25,12 +25,11 @@ const SettingsSchema<ExportOptions>& export_settings();
 // What an export records of its frame (export.json), for edit and pose. InputError naming the file.
 exporter::ExportFrame read_export_frame(const ExportOutputs& outputs);
 
-class ExportStage : public Stage {
+class ExportStage : public SettingsStage<ExportOptions> {
  public:
-  std::string name() const override { return "export"; }
+  ExportStage() : SettingsStage(export_settings()) {}
   std::vector<std::string> memory_settings() const override { return {"preview_size", "preview_strands"}; }
   std::vector<std::string> depends_on() const override { return {"fur"}; }
-  const StageSettings& settings() const override { return export_settings(); }
   std::vector<std::filesystem::path> inputs(const StageContext& context) const override;
   json parameters(const StageContext& context) const override;
   json run(StageContext& context, const std::filesystem::path& out, const std::filesystem::path& resume) override;

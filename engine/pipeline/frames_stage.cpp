@@ -23,10 +23,6 @@ namespace {
 
 constexpr int kStageVersion = 1;
 
-FramesSettings settings_of(const StageContext& c) {
-  return frames_settings().resolve(c.quality, c.settings.value("frames", json::object()));
-}
-
 double angle_deg(glm::vec3 a, glm::vec3 b) {
   const float la = glm::length(a), lb = glm::length(b);
   if (!(la > 0 && lb > 0)) return 0;
@@ -84,7 +80,7 @@ std::vector<fs::path> FramesStage::inputs(const StageContext& c) const {
 }
 
 json FramesStage::parameters(const StageContext& c) const {
-  return {{"stage_version", kStageVersion}, {"settings", frames_settings().values(c.quality, c.settings.value("frames", json::object()))}};
+  return key_of(c, kStageVersion);
 }
 
 json FramesStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) {

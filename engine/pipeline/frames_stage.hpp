@@ -23,12 +23,11 @@ struct FramesSettings {
 };
 const SettingsSchema<FramesSettings>& frames_settings();
 
-class FramesStage : public Stage {
+class FramesStage : public SettingsStage<FramesSettings> {
  public:
-  std::string name() const override { return "frames"; }
+  FramesStage() : SettingsStage(frames_settings()) {}
   std::vector<std::string> memory_settings() const override { return {"roots"}; }
   std::vector<std::string> depends_on() const override { return {"defur"}; }
-  const StageSettings& settings() const override { return frames_settings(); }
   std::vector<std::filesystem::path> inputs(const StageContext& context) const override;
   json parameters(const StageContext& context) const override;
   json run(StageContext& context, const std::filesystem::path& out, const std::filesystem::path& resume) override;

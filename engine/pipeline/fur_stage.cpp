@@ -45,8 +45,6 @@ namespace {
 
 constexpr int kStageVersion = 4;  // 2: fur/roots.npz when the groom has roots of its own; 3: selection, length factors; 4: the selection trades held-out orientation against the envelope
 
-FurSettings settings_of(const StageContext& c) { return fur_settings().resolve(c.quality, c.settings.value("fur", json::object())); }
-
 }  // namespace
 
 fur::FaceFrames read_face_frames(const fs::path& file, std::size_t faces) {
@@ -177,7 +175,7 @@ std::vector<fs::path> FurStage::inputs(const StageContext& c) const {
 }
 
 json FurStage::parameters(const StageContext& c) const {
-  return {{"stage_version", kStageVersion}, {"settings", fur_settings().values(c.quality, c.settings.value("fur", json::object()))}};
+  return key_of(c, kStageVersion);
 }
 
 namespace {

@@ -66,12 +66,11 @@ struct FurSettings {
 FurSettings fur_quality_preset(const std::string& quality);
 const SettingsSchema<FurSettings>& fur_settings();
 
-class FurStage : public Stage {
+class FurStage : public SettingsStage<FurSettings> {
  public:
-  std::string name() const override { return "fur"; }
+  FurStage() : SettingsStage(fur_settings()) {}
   std::vector<std::string> memory_settings() const override { return {"batch", "resolution", "patch", "chamfer_queries", "strands", "metric_strands"}; }
   std::vector<std::string> depends_on() const override { return {"frames"}; }
-  const StageSettings& settings() const override { return fur_settings(); }
   std::vector<std::filesystem::path> inputs(const StageContext& context) const override;
   json parameters(const StageContext& context) const override;
   json run(StageContext& context, const std::filesystem::path& out, const std::filesystem::path& resume) override;

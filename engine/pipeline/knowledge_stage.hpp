@@ -45,12 +45,11 @@ double read_metric_scale(const KnowledgeOutputs& outputs);
 // The regions' growth directions in world coordinates it wrote (unit; zero for a region it lacks).
 std::array<glm::vec3, body::kRegionCount> read_directions_world(const KnowledgeOutputs& outputs);
 
-class KnowledgeStage : public Stage {
+class KnowledgeStage : public SettingsStage<KnowledgeSettings> {
  public:
-  std::string name() const override { return "knowledge"; }
+  KnowledgeStage() : SettingsStage(knowledge_settings()) {}
   std::vector<std::string> memory_settings() const override { return {"image_size"}; }
   std::vector<std::string> depends_on() const override { return {"body"}; }
-  const StageSettings& settings() const override { return knowledge_settings(); }
   // No source named: stop before the first stage runs, not after an hour of neus.
   void check_needed_settings(const std::string& quality, const json& overrides) const override;
   std::vector<std::filesystem::path> inputs(const StageContext& context) const override;

@@ -26,10 +26,6 @@ namespace {
 
 constexpr int kStageVersion = 1;
 
-neus::NeusQuality settings_of(const StageContext& c) {
-  return neus_settings().resolve(c.quality, c.settings.value("neus", json::object()));
-}
-
 
 // Ground truth when the scene is an `nf_gpu synth` scene: chamfer against its fur envelope.
 json ground_truth_metrics(const StageContext& c, const geometry::Mesh& mesh, const neus::OccupancyGrid& hull) {

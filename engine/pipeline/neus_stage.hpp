@@ -23,11 +23,10 @@ const SettingsSchema<neus::NeusQuality>& neus_settings();
 // Every camera's name, size, intrinsics and pose, as the stages that read the photos key them.
 json cameras_json(const io::Scene& scene);
 
-class NeusStage : public Stage {
+class NeusStage : public SettingsStage<neus::NeusQuality> {
  public:
-  std::string name() const override { return "neus"; }
+  NeusStage() : SettingsStage(neus_settings()) {}
   std::vector<std::string> memory_settings() const override { return {"rays", "samples_per_ray", "mesh_resolution", "hull_resolution"}; }
-  const StageSettings& settings() const override { return neus_settings(); }
   std::vector<std::filesystem::path> inputs(const StageContext& context) const override;
   json parameters(const StageContext& context) const override;
   json run(StageContext& context, const std::filesystem::path& out, const std::filesystem::path& resume) override;

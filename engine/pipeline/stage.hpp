@@ -2,7 +2,8 @@
 // A stage of `nf_gpu reconstruct`: it names the files it reads and the parameters that
 // change its result, and writes its outputs into a folder the framework gives it. Everything else
 // (hashing, skipping, atomic replacement, resume folders, records) is the framework's
-// (pipeline.hpp), so adding a stage is writing one of these and listing it in stages.cpp.
+// (pipeline.hpp), so adding a stage is writing one of these (a SettingsStage, below) and listing it
+// in stages.cpp.
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -53,6 +54,35 @@ class Stage {
   // A stage with checkpoints polls nf::interrupted() (Ctrl-C), saves one and throws Interrupted.
   // Returns a summary for the stage record: what it cost and what it achieved.
   virtual json run(StageContext& context, const std::filesystem::path& out, const std::filesystem::path& resume) = 0;
+};
+
+// The run's values of one stage's settings: the quality's preset with the run's `--set` overrides.
+// The one way any stage resolves settings, its own or (for a key it shares) another stage's.
+template <class S>
+S resolve_settings(const SettingsSchema<S>& schema, const StageContext& context) {
+  return schema.resolve(context.quality, context.settings.value(schema.stage(), json::object()));
+}
+// The same values as JSON, as stage keys and records keep them.
+inline json settings_values(const StageSettings& schema, const StageContext& context) {
+  return schema.values(context.quality, context.settings.value(schema.stage(), json::object()));
+}
+
+// A stage whose settings are one typed schema: its name is the schema's, settings() is the schema,
+// settings_of() the run's values, and key_of() the start of every stage's parameters() (its
+// version and resolved settings), so a stage writes none of these itself.
+template <class S>
+class SettingsStage : public Stage {
+ public:
+  explicit SettingsStage(const SettingsSchema<S>& schema) : schema_(schema) {}
+  std::string name() const final { return schema_.stage(); }
+  const StageSettings& settings() const final { return schema_; }
+  S settings_of(const StageContext& context) const { return resolve_settings(schema_, context); }
+  json key_of(const StageContext& context, int stage_version) const {
+    return {{"stage_version", stage_version}, {"settings", settings_values(schema_, context)}};
+  }
+
+ private:
+  const SettingsSchema<S>& schema_;
 };
 
 }  // namespace nf::pipeline

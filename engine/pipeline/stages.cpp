@@ -56,6 +56,11 @@ json check_reconstruct_options(const std::vector<std::unique_ptr<Stage>>& stages
                        " (stages: " + join(names) + ")");
   json settings = json::object();
   for (const std::string& s : options.settings) apply_setting(settings, s);
+  if (options.scene_scale > 0) {
+    if (settings.contains("knowledge") && settings["knowledge"].contains("cm_per_unit"))
+      throw UsageError("--scene-scale and --set knowledge.cm_per_unit both give the scene's scale: give one");
+    settings["knowledge"]["cm_per_unit"] = options.scene_scale;
+  }
   for (const auto& [stage, values] : settings.items()) {
     const auto it = std::find(names.begin(), names.end(), stage);
     if (it == names.end())

@@ -17,6 +17,7 @@ struct ReconstructOptions {
   std::string quality = "default";
   RunOptions run;
   std::vector<std::string> settings;  // "stage.key=value", e.g. "neus.steps=300"
+  double scene_scale = 0;              // --scene-scale: cm per scene unit (the knowledge stage's cm_per_unit); 0: none given
 };
 
 // Checks everything a run can check before it starts, and touches no file: the quality, --from

@@ -89,7 +89,7 @@ json stage_summary(const fs::path& work, const std::string& stage) {
 // same strand count and steps, scores within the spread two uninterrupted runs show (the
 // kill-and-resume test's tolerances).
 void check_like_reference(const fs::path& work, const fs::path& reference) {
-  for (const char* stage : {"neus", "body", "knowledge", "defur", "frames", "fur", "export"}) {
+  for (const std::string& stage : stage_names()) {
     INFO(stage);
     CHECK(file_names(work / stage) == file_names(reference / stage));
   }
@@ -289,7 +289,7 @@ TEST_CASE("batch, Slurm backend: a job array on a real one-node cluster, one tas
   // Every task wrote what reconstruct writes; with 4 scenes (label long) the first is also compared
   // with the same scene run by reconstruct (the local test does that by default).
   for (const Scene& s : scenes)
-    for (const char* stage : {"neus", "body", "knowledge", "defur", "frames", "fur", "export"}) {
+    for (const std::string& stage : stage_names()) {
       INFO(s.name, " ", stage);
       CHECK(file_names(root / "work" / s.name / stage) == file_names(root / "work" / scenes[0].name / stage));
     }

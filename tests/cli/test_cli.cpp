@@ -26,6 +26,7 @@ using nf::test::Result;
 using nf::test::run;
 using nf::test::slurp;
 using nf::test::spawn;
+using nf::test::stage_names;
 using nf::test::wait_exit;
 using nf::test::wait_for;
 
@@ -774,7 +775,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   // docs/settings.md's tables are the ones the declarations make (regenerate them with --markdown).
   std::ifstream settings_doc(NF_SETTINGS_DOC);
   const std::string settings_text(std::istreambuf_iterator<char>(settings_doc), {});
-  for (const std::string stage : {"neus", "body", "knowledge", "defur", "frames", "fur", "export"}) {
+  for (const std::string& stage : stage_names()) {
     const Result table = run("reconstruct --help-stage " + stage + " --markdown");
     CHECK_MESSAGE(settings_text.find("### `" + stage + "`\n\n" + table.output) != std::string::npos,
                   "docs/settings.md's " << stage << " settings table is stale: paste `nf_gpu reconstruct --help-stage " << stage

@@ -264,6 +264,12 @@ TEST_CASE("reconstruct checks every option before it touches a file") {
   o.run.to.clear();
   o.settings.push_back("knowledge.preset=cat");
   CHECK(pipeline::check_reconstruct_options(stages, o)["neus"]["steps"] == "10");  // as typed; the schema reads it
+  o.scene_scale = 2.5;  // --scene-scale is the knowledge stage's scale, a number; with the setting as well it is refused
+  CHECK(pipeline::check_reconstruct_options(stages, o)["knowledge"]["cm_per_unit"] == 2.5);
+  o.settings.push_back("knowledge.cm_per_unit=3");
+  CHECK_THROWS_WITH_AS(pipeline::check_reconstruct_options(stages, o), doctest::Contains("--scene-scale and --set knowledge.cm_per_unit"),
+                       UsageError);
+  o.settings.pop_back(), o.scene_scale = 0;
   o.settings.push_back("knowledge.file=" + (root / "a_file").string());
   CHECK_THROWS_WITH_AS(pipeline::check_reconstruct_options(stages, o), doctest::Contains("give one"), UsageError);
   CHECK(stages.front()->settings().values("draft", {{"steps", "10"}})["steps"] == 10);

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <doctest/doctest.h>
 
@@ -49,6 +50,25 @@ inline json json_in(const std::string& output) {
   return json::parse(output.substr(at));
 }
 inline json json_of(const Result& r) { return json_in(r.output); }
+
+// reconstruct's stages in their order, as `nf_gpu reconstruct --help` lists them: a test that walks
+// every stage follows the binary's list rather than keeping a copy of its own.
+inline std::vector<std::string> stage_names() {
+  const Result help = run("reconstruct --help");
+  const std::string marker = "stages, in order: ";
+  const std::size_t at = help.output.find(marker);
+  INFO(help.output);
+  REQUIRE(at != std::string::npos);
+  const std::string line = help.output.substr(at + marker.size(), help.output.find('\n', at) - at - marker.size());
+  std::vector<std::string> names;
+  for (std::size_t from = 0; from <= line.size();) {
+    const std::size_t comma = std::min(line.find(", ", from), line.size());
+    names.push_back(line.substr(from, comma - from));
+    from = comma + 2;
+  }
+  REQUIRE(names.size() >= 2);
+  return names;
+}
 
 // Starts nf_gpu in the background with its output going to `log`.
 inline pid_t spawn(const std::string& args, const std::filesystem::path& log) {
