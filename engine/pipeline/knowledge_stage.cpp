@@ -3,8 +3,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
-#include <map>
 #include <optional>
 
 #include "engine/core/atomic_file.hpp"
@@ -20,6 +18,7 @@
 #include "engine/knowledge/prompts.hpp"
 #include "engine/knowledge/vlm_annotation.hpp"
 #include "engine/knowledge/vlm_client.hpp"
+#include "engine/knowledge/vlm_session.hpp"
 #include "engine/pipeline/body_stage.hpp"
 
 namespace nf::pipeline {
@@ -28,108 +27,11 @@ namespace {
 
 constexpr int kStageVersion = 3;  // 2: the body length as a second scale cue; 3: the photos' eyes
 
-KnowledgeSettings settings_of(const StageContext& c) {
-  return knowledge_settings().resolve(c.quality, c.settings.value("knowledge", json::object()));
-}
-
 std::string source_help() {
   return "name one source of fur knowledge: --set knowledge.preset=NAME (presets: " + join(knowledge::preset_names()) +
          "), --set knowledge.file=FILE (a knowledge.json), or --set knowledge.vlm=URL --set knowledge.model=NAME (any "
          "OpenAI-compatible endpoint; the API key from " + std::string(kVlmKeyVariable) + ")";
 }
-
-// Every request of a VLM annotation goes through here: answered from the cache when the same
-// conversation was asked before (images, prompts, model, sample), else sent; either way one line of
-// the transcript. The API key is never in a line: images are named by file, and any echo of the key
-// by a server is masked.
-class VlmSession {
- public:
-  VlmSession(knowledge::VlmEndpoint endpoint, fs::path cache, const fs::path& transcript)
-      : endpoint_(std::move(endpoint)), cache_(std::move(cache)), transcript_(transcript, std::ios::trunc) {
-    fs::create_directories(cache_);
-  }
-  // A conversation that ended in an error is not kept: a rerun asks the model again.
-  void forget_sample() {
-    for (const fs::path& p : written_) fs::remove(p);
-    written_.clear();
-  }
-  void keep_sample() { written_.clear(); }
-  void name_image(const std::string& data_url, const std::string& label) { labels_[data_url] = label; }
-  void set_sample(int sample) { sample_ = sample; }
-
-  std::string chat(const json& messages, const std::string& step) {
-    const std::string url = knowledge::redacted_url(knowledge::chat_completions_url(endpoint_.url));
-    const std::string key = hash_bytes(dump_text(json{{"url", url}, {"model", endpoint_.model}, {"temperature", endpoint_.temperature},
-                                                      {"sample", sample_}, {"messages", messages}}));
-    const fs::path cached = cache_ / (key + ".json");
-    json line{{"sample", sample_}, {"step", step}, {"url", url}, {"model", endpoint_.model}, {"messages", readable(messages)}};
-    const auto start = std::chrono::steady_clock::now();
-    knowledge::ChatReply reply;
-    bool hit = false;
-    if (fs::exists(cached)) {
-      try {
-        const json j = io::read_json_file(cached);
-        reply.content = j.at("answer").get<std::string>();
-        reply.finish_reason = j.value("finish_reason", std::string());
-        hit = true;
-      } catch (const std::exception&) {  // a damaged cache entry is asked again
-      }
-    }
-    if (!hit) {
-      log::info("knowledge: asking ", endpoint_.model, " (", step, ", sample ", sample_ + 1, ")");
-      try {
-        reply = knowledge::chat_completion(endpoint_, messages);
-      } catch (const Error& e) {  // the failed request is part of the record too
-        line["error"] = e.what();
-        transcript_ << masked(dump_text(line)) << "\n" << std::flush;
-        throw;
-      }
-      reply.content = masked(reply.content);
-      write_file_atomic(cached, dump_text(json{{"answer", reply.content}, {"finish_reason", reply.finish_reason}}) + "\n");
-      written_.push_back(cached);
-      ++sent, request_bytes += reply.request_bytes, answer_bytes += reply.answer_bytes, attempts += reply.attempts;
-    } else {
-      ++from_cache;
-    }
-    if (reply.finish_reason == "length")
-      warnings.push_back("the " + step + " answer was cut off at the model's token limit");
-    line["cached"] = hit;
-    line["answer"] = reply.content;
-    line["finish_reason"] = reply.finish_reason;
-    if (!hit) line["usage"] = reply.usage, line["attempts"] = reply.attempts, line["request_bytes"] = reply.request_bytes,
-              line["answer_bytes"] = reply.answer_bytes;
-    line["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    transcript_ << masked(dump_text(line)) << "\n" << std::flush;
-    return reply.content;
-  }
-
-  int sent = 0, from_cache = 0, attempts = 0;
-  std::size_t request_bytes = 0, answer_bytes = 0;
-  std::vector<std::string> warnings;
-
- private:
-  // Messages with each image replaced by the file it was saved as.
-  json readable(const json& messages) const {
-    json out = messages;
-    for (json& m : out)
-      if (m.contains("content") && m["content"].is_array())
-        for (json& part : m["content"])
-          if (part.value("type", std::string()) == "image_url") {
-            const std::string url = part["image_url"].value("url", std::string());
-            const auto it = labels_.find(url);
-            part["image_url"]["url"] = it != labels_.end() ? it->second : "(image, " + std::to_string(url.size()) + " bytes)";
-          }
-    return out;
-  }
-  std::string masked(std::string text) const { return knowledge::mask_secret(std::move(text), endpoint_.api_key); }
-
-  knowledge::VlmEndpoint endpoint_;
-  fs::path cache_;
-  std::ofstream transcript_;
-  std::map<std::string, std::string> labels_;
-  std::vector<fs::path> written_;  // cache entries of the current sample
-  int sample_ = 0;
-};
 
 // The transcript is written under the stage's resume folder, which survives a failure, and copied
 // into the outputs on success: after an error it is still there to read.
@@ -155,9 +57,9 @@ json annotate_with_vlm(const StageContext& c, const KnowledgeSettings& s, const 
   const knowledge::AnnotationImages images{photos.frontal.data_url(), photos.side_with_axes.data_url()};
 
   const fs::path transcript = resume / "transcript.jsonl";
-  std::optional<VlmSession> open_session;
+  std::optional<knowledge::VlmSession> open_session;
   open_session.emplace(endpoint, c.work / ".cache" / "knowledge", transcript);
-  VlmSession& session = *open_session;
+  knowledge::VlmSession& session = *open_session;
   session.name_image(images.frontal, "images/frontal.jpg");
   session.name_image(images.side_with_axes, "images/side_axes.jpg");
   std::vector<knowledge::Knowledge> samples;
@@ -280,7 +182,7 @@ std::vector<fs::path> KnowledgeStage::inputs(const StageContext& c) const {
 json KnowledgeStage::parameters(const StageContext& c) const {
   std::string prompts = knowledge::system_prompt();
   for (const knowledge::Prompt& p : knowledge::paper_prompts()) prompts += p.message();
-  json settings = knowledge_settings().values(c.quality, c.settings.value("knowledge", json::object()));
+  json settings = settings_values(knowledge_settings(), c);
   // The stage key is written to disk: a user name, password or key inside the URL stays out of it.
   const std::string vlm = settings.value("vlm", std::string());
   if (!vlm.empty()) settings["vlm"] = knowledge::redacted_url(vlm) + " #" + hash_bytes(vlm);
