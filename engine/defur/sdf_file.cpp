@@ -3,9 +3,18 @@
 #include <cmath>
 
 #include "engine/core/error.hpp"
+#include "engine/geometry/mesh_tools.hpp"
 #include "engine/io/npz.hpp"
 
 namespace nf::defur {
+
+SdfFile bald_body_sdf(const geometry::Mesh& bald, int resolution, const std::string& name) {
+  geometry::SdfOptions options;
+  options.resolution = resolution;
+  options.band = 8.f * geometry::mesh_bounds(bald).longest() / float(resolution - 1);
+  geometry::SignedDistanceGrid sdf = geometry::signed_distance_grid(bald, options, name);
+  return {sdf.grid, sdf.band, std::move(sdf.distance)};
+}
 
 void write_sdf_file(const std::filesystem::path& file, const SdfFile& sdf) {
   const glm::ivec3 d = sdf.grid.dims;

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "engine/core/error.hpp"
+#include "engine/defur/sdf_file.hpp"
 #include "engine/defur/vertex_fur.hpp"
 #include "engine/geometry/mesh_sdf.hpp"
 #include "engine/geometry/mesh_tools.hpp"
@@ -84,11 +85,7 @@ GroundTruthInputs ground_truth_inputs(gpu::Context& gpu, const fs::path& scene_d
   data.cm_per_unit = cm;
   data.fur_area = fur_area(in.bald, vertex_fur);
 
-  geometry::SdfOptions sdf_options;
-  sdf_options.resolution = o.sdf_resolution;
-  sdf_options.band = 8.f * geometry::mesh_bounds(in.bald).longest() / float(sdf_options.resolution - 1);
-  const geometry::SignedDistanceGrid sdf = geometry::signed_distance_grid(in.bald, sdf_options, gt->bald().string());
-  data.bald_sdf = {sdf.grid, sdf.band, sdf.distance};
+  data.bald_sdf = defur::bald_body_sdf(in.bald, o.sdf_resolution, gt->bald().string());
   set_surface_inputs(data, in.outer, {}, o.seed);
 
   const io::Scene scene = o.make_views ? io::read_scene(scene_dir) : io::Scene{};

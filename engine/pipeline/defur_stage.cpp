@@ -184,11 +184,9 @@ json DefurStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) 
   seconds["vertex_knowledge"] = t.seconds();
 
   t.restart();
-  geometry::SdfOptions sdf_options;
-  sdf_options.resolution = s.sdf_resolution > 0 ? s.sdf_resolution : sdf_resolution(bald, knowledge, cm);
-  sdf_options.band = 8.f * geometry::mesh_bounds(bald).longest() / float(sdf_options.resolution - 1);  // 8 voxels
-  const geometry::SignedDistanceGrid bald_sdf = geometry::signed_distance_grid(bald, sdf_options, out.bald().string());
-  defur::write_sdf_file(out.bald_sdf(), {bald_sdf.grid, bald_sdf.band, bald_sdf.distance});
+  const defur::SdfFile bald_sdf =
+      defur::bald_body_sdf(bald, s.sdf_resolution > 0 ? s.sdf_resolution : sdf_resolution(bald, knowledge, cm), out.bald().string());
+  defur::write_sdf_file(out.bald_sdf(), bald_sdf);
   seconds["bald_sdf"] = t.seconds();
 
   t.restart();
