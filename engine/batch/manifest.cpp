@@ -17,7 +17,7 @@ namespace fs = std::filesystem;
 namespace {
 
 // A setting value as reconstruct's --set takes it: the text typed (strings unquoted).
-std::string setting_text(const json& value) { return value.is_string() ? value.get<std::string>() : value.dump(); }
+std::string setting_text(const json& value) { return value.is_string() ? value.get<std::string>() : dump_text(value); }
 
 // {"fur.steps": 300} or {"fur": {"steps": 300}} -> "fur.steps=300", ...
 void add_settings(const io::JsonField& settings, std::vector<std::string>& out) {

@@ -256,6 +256,9 @@ json make_views(StageContext& c, const FurSettings& s, FurInputs& in, const fs::
   std::unique_ptr<fur::FurPatches> held_store;
   if (s.patch) held_store = std::make_unique<fur::FurPatches>(c.gpu, in.bald, scratch / "held_out_patches", s.patch);
   std::uint32_t most_scales = 1;
+  // Minutes for photos of several megapixels (their Gabor maps at full resolution): a progress line.
+  Progress progress("fur views", train_ids.size() + held_ids.size());
+  std::size_t prepared = 0;
   const auto make = [&](const std::vector<std::uint32_t>& ids, std::vector<fur::FurView>& views, fur::FurPatches* store) {
     for (std::uint32_t v : ids) {
       const fs::path nonbald_file = masks / (names[v] + ".png");
@@ -275,10 +278,12 @@ json make_views(StageContext& c, const FurSettings& s, FurInputs& in, const fs::
       }
       views.push_back(fur::make_fur_view(c.gpu, c.scene, v, nonbald ? &*nonbald : nullptr, in.bald, o, store ? &native : nullptr));
       if (store) store->add(v, native);
+      progress.update(++prepared, "camera " + c.scene.cameras[v].name);
     }
   };
   make(train_ids, in.data.train, in.patches.get());
   make(held_ids, in.data.held_out, held_store.get());
+  progress.finish();
   if (held_store)
     for (std::uint32_t h = 0; h < held_store->size(); ++h)
       // Seeded by the camera alone: runs of other seeds are scored on the same patches.

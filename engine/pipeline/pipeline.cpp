@@ -51,7 +51,7 @@ void parameter_changes(const json& a, const json& b, const std::string& path, st
     return;
   }
   const auto shown = [](const json& v) {
-    const std::string text = v.is_null() ? "(none)" : v.dump();
+    const std::string text = v.is_null() ? "(none)" : dump_text(v);
     return text.size() > 40 ? text.substr(0, 37) + "..." : text;
   };
   out.push_back(path + " " + shown(a) + " -> " + shown(b));
@@ -111,7 +111,7 @@ std::string memory_advice(const Stage& stage, const StageContext& c) {
   std::string advice = "; to ask less of the device, lower";
   for (std::size_t k = 0; k < keys.size(); ++k)
     advice += std::string(k ? "," : "") + " --set " + stage.name() + "." + keys[k] +
-              (values.contains(keys[k]) ? " (now " + values[keys[k]].dump() + ")" : "");
+              (values.contains(keys[k]) ? " (now " + dump_text(values[keys[k]]) + ")" : "");
   return advice + (c.quality == "draft" ? "" : ", or use --quality draft");
 }
 
@@ -281,7 +281,7 @@ std::vector<StageOutcome> run_pipeline(const std::vector<std::unique_ptr<Stage>>
       fs::remove_all(resume);
     }
     fs::create_directories(resume);
-    write_file_atomic(resume / "key.json", key.dump(2) + "\n");
+    write_file_atomic(resume / "key.json", dump_text(key, 2) + "\n");
 
     log::info("stage ", name, ": running", fs::exists(record) ? "" : " (no result yet)");
     const auto start = std::chrono::steady_clock::now();
@@ -293,14 +293,14 @@ std::vector<StageOutcome> run_pipeline(const std::vector<std::unique_ptr<Stage>>
     }
     outcome.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     outcome.ran = true;
-    write_file_atomic(partial / "stage.json", json{{"stage", name},
-                                                   {"key", key},
-                                                   {"quality", c.quality},
-                                                   {"settings", stage.settings().values(c.quality, c.settings.value(name, json::object()))},
-                                                   {"summary", outcome.summary},
-                                                   {"seconds", outcome.seconds},
-                                                   {"finished", utc_now()}}
-                                                  .dump(2) + "\n");
+    write_file_atomic(partial / "stage.json", dump_text(json{{"stage", name},
+                                                             {"key", key},
+                                                             {"quality", c.quality},
+                                                             {"settings", stage.settings().values(c.quality, c.settings.value(name, json::object()))},
+                                                             {"summary", outcome.summary},
+                                                             {"seconds", outcome.seconds},
+                                                             {"finished", utc_now()}},
+                                                        2) + "\n");
     // Swap: the previous result is removed only once the new one is complete, and on disk (a
     // file server may otherwise commit the renames before the data they name).
     if (const int error = sync_tree(partial)) {

@@ -48,7 +48,7 @@ std::string value_text(const json& v) {
   if (v.is_boolean()) return v.get<bool>() ? "1" : "0";
   if (v.is_string()) return v.get<std::string>();
   if (v.is_number_float()) return number_text(v.get<double>());
-  return v.dump();
+  return dump_text(v);
 }
 
 }  // namespace
@@ -67,14 +67,14 @@ double setting_number(const std::string& where, const SettingInfo& info, const j
     } catch (const std::exception&) {
       used = 0;
     }
-    if (text.empty() || used != text.size()) throw UsageError("--set " + where + ": expected " + expected + ", got " + value.dump());
+    if (text.empty() || used != text.size()) throw UsageError("--set " + where + ": expected " + expected + ", got " + dump_text(value));
   } else if (value.is_number() && !value.is_boolean()) {
     v = value.get<double>();
   } else {
-    throw UsageError("--set " + where + ": expected " + expected + ", got " + value.dump());
+    throw UsageError("--set " + where + ": expected " + expected + ", got " + dump_text(value));
   }
   if (!std::isfinite(v) || (integer && v != std::floor(v)) || v < info.min || v > info.max)
-    throw UsageError("--set " + where + ": expected " + expected + ", got " + value.dump());
+    throw UsageError("--set " + where + ": expected " + expected + ", got " + dump_text(value));
   return v;
 }
 
@@ -87,11 +87,11 @@ bool setting_flag(const std::string& where, const json& value) {
   }
   if (value.is_number_integer() && (value.get<std::int64_t>() == 0 || value.get<std::int64_t>() == 1))
     return value.get<std::int64_t>() == 1;
-  throw UsageError("--set " + where + ": expected 0, 1, true or false, got " + value.dump());
+  throw UsageError("--set " + where + ": expected 0, 1, true or false, got " + dump_text(value));
 }
 
 std::string setting_text(const std::string& where, const SettingInfo& info, const json& value) {
-  const std::string text = value.is_string() ? value.get<std::string>() : value.dump();
+  const std::string text = value.is_string() ? value.get<std::string>() : dump_text(value);
   if (!info.choices.empty() && std::find(info.choices.begin(), info.choices.end(), text) == info.choices.end())
     throw UsageError("--set " + where + ": expected one of " + join(info.choices, ", ") + ", got '" + text + "'" +
                      did_you_mean(text, info.choices));
