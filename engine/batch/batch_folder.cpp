@@ -39,7 +39,7 @@ void BatchFolder::write(const std::vector<BatchTask>& tasks, const fs::path& man
   j["tasks"] = json::array();
   for (const BatchTask& t : tasks) j["tasks"].push_back(to_json(t));
   if (!j.contains("submissions")) j["submissions"] = json::array();
-  write_file_atomic(record(), j.dump(2) + "\n");
+  write_file_atomic(record(), dump_text(j, 2) + "\n");
 }
 
 json BatchFolder::read() const {
@@ -68,7 +68,7 @@ fs::path BatchFolder::nf_gpu() const { return read().value("nf_gpu", self_execut
 void BatchFolder::add_submission(const json& submission) const {
   json j = read();
   j["submissions"].push_back(submission);
-  write_file_atomic(record(), j.dump(2) + "\n");
+  write_file_atomic(record(), dump_text(j, 2) + "\n");
 }
 
 TaskState BatchFolder::state(const std::string& task) const {
@@ -95,7 +95,7 @@ TaskState BatchFolder::state(const std::string& task) const {
 void BatchFolder::write_state(const std::string& task, const TaskState& s) const {
   const json j{{"state", s.state}, {"attempts", s.attempts}, {"host", s.host},   {"pid", s.pid},          {"started", s.started},
                {"ended", s.ended}, {"job", s.job},           {"message", s.message}, {"exit_code", s.exit_code}};
-  write_file_atomic(state_file(task), j.dump(2) + "\n");
+  write_file_atomic(state_file(task), dump_text(j, 2) + "\n");
 }
 
 fs::path default_batch_folder(const fs::path& manifest) {

@@ -141,6 +141,8 @@ std::vector<BatchTask> read_csv_manifest(const fs::path& file, const fs::path& b
   for (int row = 1; std::getline(in, line); ++row) {
     if (line.find_first_not_of(" \t\r") == std::string::npos || line[0] == '#') continue;
     const std::string where = file.string() + ": line " + std::to_string(row);
+    // The manifest's text goes into batch.json and the stage keys, which hold UTF-8 only.
+    if (!is_utf8(line)) throw InputError(where + ": not UTF-8 text (save the manifest as UTF-8)");
     std::vector<std::string> fields = csv_fields(line, where);
     if (header.empty()) {
       header = fields;

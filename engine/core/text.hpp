@@ -19,6 +19,10 @@ std::string did_you_mean(std::string_view word, const std::vector<std::string>& 
 // ASCII letters lower-cased (other bytes, UTF-8 included, unchanged).
 std::string to_lower(std::string text);
 
+// Whether `text` is well-formed UTF-8 (no overlong forms, surrogates or code points past U+10FFFF):
+// what JSON files and records can hold.
+bool is_utf8(std::string_view text);
+
 // At most `max_bytes` of `text` (cut at a UTF-8 character boundary, "..." appended when cut), with
 // control characters as spaces: for quoting untrusted text in a message.
 std::string shorten(std::string_view text, std::size_t max_bytes);

@@ -30,6 +30,7 @@ CheckpointProgress checkpoint_progress(const WeightsFile& file, const std::files
     p.seconds = c.at("seconds").get<double>();
     p.last = c.at("last");
     p.history = c.at("history");
+    if (p.history.is_null()) p.history = json::array();  // as the trainers read it before: no history
     if (!p.history.is_array()) throw InputError(path.string() + ": 'history' is not an array");
   } catch (const json::exception& e) {
     throw InputError(path.string() + ": " + e.what());

@@ -281,8 +281,13 @@ json make_views(StageContext& c, const FurSettings& s, FurInputs& in, const fs::
       progress.update(++prepared, "camera " + c.scene.cameras[v].name);
     }
   };
-  make(train_ids, in.data.train, in.patches.get());
-  make(held_ids, in.data.held_out, held_store.get());
+  try {
+    make(train_ids, in.data.train, in.patches.get());
+    make(held_ids, in.data.held_out, held_store.get());
+  } catch (...) {
+    progress.stop("stopped");  // not a finished line before the error
+    throw;
+  }
   progress.finish();
   if (held_store)
     for (std::uint32_t h = 0; h < held_store->size(); ++h)

@@ -103,7 +103,7 @@ std::string memory_advice(const Stage& stage, const StageContext& c) {
   if (keys.empty()) return "";
   json values;
   try {
-    values = stage.settings().values(c.quality, c.settings.value(stage.name(), json::object()));
+    values = settings_values(stage.settings(), c);
   } catch (const Error&) {
     values = json::object();
   }
@@ -296,7 +296,7 @@ std::vector<StageOutcome> run_pipeline(const std::vector<std::unique_ptr<Stage>>
     write_file_atomic(partial / "stage.json", dump_text(json{{"stage", name},
                                                              {"key", key},
                                                              {"quality", c.quality},
-                                                             {"settings", stage.settings().values(c.quality, c.settings.value(name, json::object()))},
+                                                             {"settings", settings_values(stage.settings(), c)},
                                                              {"summary", outcome.summary},
                                                              {"seconds", outcome.seconds},
                                                              {"finished", utc_now()}},

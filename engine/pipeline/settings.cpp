@@ -92,6 +92,9 @@ bool setting_flag(const std::string& where, const json& value) {
 
 std::string setting_text(const std::string& where, const SettingInfo& info, const json& value) {
   const std::string text = value.is_string() ? value.get<std::string>() : dump_text(value);
+  // Settings go into JSON keys and records, which hold UTF-8 only (a path in another encoding
+  // would never match its own record).
+  if (!is_utf8(text)) throw UsageError("--set " + where + ": the value is not UTF-8 text: " + dump_text(value));
   if (!info.choices.empty() && std::find(info.choices.begin(), info.choices.end(), text) == info.choices.end())
     throw UsageError("--set " + where + ": expected one of " + join(info.choices, ", ") + ", got '" + text + "'" +
                      did_you_mean(text, info.choices));

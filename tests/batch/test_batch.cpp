@@ -143,7 +143,7 @@ TEST_CASE("manifest errors name the file, the entry and the field") {
   check("column.csv", "scene,wrok\na,w\n", {"column 'wrok'", "did you mean 'work'"});
   check("quote.csv", "scene,work\n\"a,w\n", {"line 2", "quoted field is not closed"});
   // Bytes that are not UTF-8 in a setting (a fuzzer's find): an error quoting them, not a crash.
-  check("bytes.csv", "scene,work,knowledge.preset,fur.steps\na,w,cat,4\xc5\xc5" "0\n", {"bytes.csv: line 2", "fur.steps", "expected an integer"});
+  check("bytes.csv", "scene,work,knowledge.preset,fur.steps\na,w,cat,4\xc5\xc5" "0\n", {"bytes.csv: line 2", "not UTF-8"});
   check("m.txt", "scene\na\n", {"neither .json nor .csv"});
 }
 

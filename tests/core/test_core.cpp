@@ -116,6 +116,21 @@ TEST_CASE("shell words: safe ones as they are, others single-quoted") {
   CHECK(nf::shell_quote("") == "''");
 }
 
+TEST_CASE("UTF-8: well-formed text accepted; stray, cut, overlong, surrogate and out-of-range sequences refused") {
+  CHECK(nf::is_utf8(""));
+  CHECK(nf::is_utf8("plain ascii"));
+  CHECK(nf::is_utf8("F(2 cm, 20\xc2\xb0) \xe2\x80\x94 \xf0\x9f\x90\x88"));  // degree sign, em dash, a cat
+  CHECK_FALSE(nf::is_utf8("4\xc5\xc5" "0"));          // a lead byte followed by another lead byte
+  CHECK_FALSE(nf::is_utf8("\x80"));                    // a stray continuation byte
+  CHECK_FALSE(nf::is_utf8("\xe2\x80"));                // cut short at the end
+  CHECK_FALSE(nf::is_utf8("\xc0\xaf"));                // '/' in two bytes (overlong)
+  CHECK_FALSE(nf::is_utf8("\xe0\x80\xaf"));            // '/' in three bytes (overlong)
+  CHECK_FALSE(nf::is_utf8("\xed\xa0\x80"));            // a UTF-16 surrogate
+  CHECK_FALSE(nf::is_utf8("\xf4\x90\x80\x80"));        // past U+10FFFF
+  CHECK_FALSE(nf::is_utf8("\xff"));
+  CHECK(nf::is_utf8("\xf4\x8f\xbf\xbf"));             // U+10FFFF itself
+}
+
 TEST_CASE("content hashes: equal bytes hash equal, one changed byte changes the hash, unreadable files are named") {
   namespace fs = std::filesystem;
   const fs::path dir = fs::temp_directory_path() / "nf_core_hash";
