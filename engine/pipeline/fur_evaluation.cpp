@@ -72,9 +72,11 @@ FurGroundTruth read_fur_ground_truth(const fs::path& scene_dir, const FurSetting
     g.rendered = metrics::sample_strands(hair, rendered_strands, fur::kStrandPoints, 3);
   }
   if (fs::exists(gt->outer())) g.outer = io::read_mesh(gt->outer());
-  g.info = {{"strands", "gt/strands.hair"}, {"outer", "gt/outer.ply"}};
+  g.info = {{"strands", "gt/strands.hair"}, {"outer", "gt/outer.ply"}, {"cm_per_unit", gt->cm_per_unit}};
+  g.cm_per_unit = gt->cm_per_unit;
   if (std::abs(gt->cm_per_unit - cm) > 1e-3 * gt->cm_per_unit)
-    log::warn("fur: the knowledge's scale (", cm, " cm per unit) differs from the ground truth's (", gt->cm_per_unit, "); metrics use the knowledge's");
+    log::warn("fur: the knowledge's scale (", cm, " cm per unit) differs from the ground truth's (", gt->cm_per_unit,
+              "); the scores against the truth use the truth's");
   return g;
 }
 

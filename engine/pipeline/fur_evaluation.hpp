@@ -46,7 +46,11 @@ struct FurGroundTruth {
   std::optional<metrics::StrandSample> sample, rendered;
   std::optional<geometry::Mesh> outer;
   json info;  // for metrics.json (null without a ground truth)
+  // The truth's own scale: the F-scores' thresholds in mm are scene units through it, so a groom
+  // made at a wrong scale is judged at the true one (0: no ground truth; the caller's scale then).
+  double cm_per_unit = 0;
   metrics::GroomTruth truth() const { return {sample ? &*sample : nullptr, outer ? &*outer : nullptr}; }
+  double scale_or(double cm) const { return cm_per_unit > 0 ? cm_per_unit : cm; }
 };
 FurGroundTruth read_fur_ground_truth(const std::filesystem::path& scene_dir, const FurSettings& s, std::uint32_t rendered_strands, double cm);
 

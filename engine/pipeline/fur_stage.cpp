@@ -389,7 +389,7 @@ json select_groom(StageContext& c, const FurSettings& s, const FurInputs& in, fu
     metrics::StrandSample grown;
     const GroomSignals g = measure_groom(trainer, in.data, c.scene, *in.envelope, s, in.cm, &grown);
     record = to_json(g);
-    if (gt.sample) record["fscore"] = metrics::groom_scores(grown, {gt.truth().strands, nullptr}, in.cm)["fscore"];
+    if (gt.sample) record["fscore"] = metrics::groom_scores(grown, {gt.truth().strands, nullptr}, gt.scale_or(in.cm))["fscore"];
     return g;
   };
   const fur::FurFieldState trained = trainer.state();
@@ -505,7 +505,7 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
   std::unique_ptr<fur::StrandPrior> prior = fur::shipped_strand_prior(c.gpu);
   std::unique_ptr<fur::FurTrainer> trainer;
   const fs::path checkpoint = resume / "checkpoint.nfwt";
-  FurCurve curve(s, resume / "curve.jsonl", gt, in.cm);
+  FurCurve curve(s, resume / "curve.jsonl", gt, gt.scale_or(in.cm));
   const json resolution = train(c, s, in, prior, trainer, curve, checkpoint);
   curve.finish(*trainer, in.data, c.scene, out.curve());
   seconds["train"] = t.seconds();
@@ -561,8 +561,8 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
   t.restart();
   const io::StrandSet groom_strands = io::StrandSet::uniform(std::uint32_t(groom.sample_ids.size()), fur::kStrandPoints, std::move(groom.sample_xyz));
   const io::StrandSet baseline = fur::baseline_groom(*groom.roots, groom.sample_ids, s.training.lying_angle_deg);
-  const json groom_scores = metrics::groom_scores(metrics::sample_strands(groom_strands, s.metric_strands, s.metric_points, 1), gt.truth(), in.cm);
-  const json baseline_scores = metrics::groom_scores(metrics::sample_strands(baseline, s.metric_strands, s.metric_points, 1), gt.truth(), in.cm);
+  const json groom_scores = metrics::groom_scores(metrics::sample_strands(groom_strands, s.metric_strands, s.metric_points, 1), gt.truth(), gt.scale_or(in.cm));
+  const json baseline_scores = metrics::groom_scores(metrics::sample_strands(baseline, s.metric_strands, s.metric_points, 1), gt.truth(), gt.scale_or(in.cm));
   seconds["metrics"] = t.seconds();
   if (groom_scores.contains("fscore"))
     log::info("fur: F-score at (2 cm, 20 deg) ", groom_scores["fscore"].value("2cm_20deg", 0.0), " (baseline ",
