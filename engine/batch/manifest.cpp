@@ -216,19 +216,23 @@ std::vector<BatchTask> read_manifest(const fs::path& file) {
   }
   for (const BatchTask& t : tasks) {
     // What reconstruct would refuse, refused now, before anything is submitted.
-    pipeline::ReconstructOptions o;
-    o.scene = t.scene;
-    o.work = t.work;
-    o.quality = t.quality;
-    o.settings = t.settings;
-    o.scene_scale = t.scene_scale;
     try {
-      (void)pipeline::check_reconstruct_options(o);
+      (void)pipeline::check_reconstruct_options(reconstruct_options(t));
     } catch (const Error& e) {
       throw InputError(file.string() + ": " + t.origin + " (scene '" + t.name + "'): " + e.what());
     }
   }
   return tasks;
+}
+
+pipeline::ReconstructOptions reconstruct_options(const BatchTask& task) {
+  pipeline::ReconstructOptions o;
+  o.scene = task.scene;
+  o.work = task.work;
+  o.quality = task.quality;
+  o.settings = task.settings;
+  o.scene_scale = task.scene_scale;
+  return o;
 }
 
 json to_json(const BatchTask& t) {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "engine/core/json.hpp"
+#include "engine/pipeline/stages.hpp"
 
 namespace nf::batch {
 
@@ -28,6 +29,9 @@ struct BatchTask {
 // Reads and checks a manifest (InputError naming the file, the row or entry and the field).
 // Every task's settings are checked against the stages' schemas (an unknown key, a bad value).
 std::vector<BatchTask> read_manifest(const std::filesystem::path& file);
+
+// The `reconstruct` run a task is: checked when the manifest is read, run by `batch task`.
+pipeline::ReconstructOptions reconstruct_options(const BatchTask& task);
 
 json to_json(const BatchTask& task);
 BatchTask task_from_json(const json& j);

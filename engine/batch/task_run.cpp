@@ -120,14 +120,8 @@ int run_task(const BatchFolder& folder, const std::string& name, const TaskRunOp
                 job.empty() ? "" : (" (Slurm job " + job + ")").c_str());
     std::fflush(stdout);
     try {
-      pipeline::ReconstructOptions o;
-      o.scene = task.scene;
-      o.work = task.work;
-      o.quality = task.quality;
-      o.settings = task.settings;
-      o.scene_scale = task.scene_scale;
       gpu::Context context;
-      const auto outcomes = pipeline::reconstruct(context, o);
+      const auto outcomes = pipeline::reconstruct(context, reconstruct_options(task));
       for (const auto& out : outcomes)
         std::printf("%-10s %s\n", out.name.c_str(), out.ran ? ("ran in " + std::to_string(out.seconds) + " s").c_str() : "unchanged, skipped");
     } catch (const pipeline::WorkBusyError& e) {

@@ -17,6 +17,7 @@
 #include <set>
 
 #include "engine/core/json.hpp"
+#include "engine/core/stopwatch.hpp"
 #include "engine/io/strand_files.hpp"
 #include "tests/support/nf_process.hpp"
 
@@ -120,10 +121,6 @@ std::string shell(const std::string& command) {
   return out;
 }
 
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
 }  // namespace
 
 TEST_CASE("batch, local backend: two scenes at a time, stopped with SIGTERM in their fur stages, resumed, like reconstruct") {
@@ -212,11 +209,11 @@ TEST_CASE("batch, Slurm backend: a job array on a real one-node cluster, one tas
   const auto scenes = make_scenes(root, count);
   write_manifest(root / "m.json", scenes, true);
   const fs::path batch = root / "m.batch";
-  const auto t0 = std::chrono::steady_clock::now();
+  const nf::Stopwatch t0;
   std::string timeline;
   const auto mark = [&](const std::string& what) {
     char line[256];
-    std::snprintf(line, sizeof line, "%7.1f s  %s\n", seconds_since(t0), what.c_str());
+    std::snprintf(line, sizeof line, "%7.1f s  %s\n", t0.seconds(), what.c_str());
     timeline += line;
   };
 
@@ -247,7 +244,7 @@ TEST_CASE("batch, Slurm backend: a job array on a real one-node cluster, one tas
   // Slurm holds a requeued job for two minutes before it may start again; the test releases them.
   bool all_done = false;
   std::set<std::string> resumed;
-  while (!all_done && seconds_since(t0) < 600) {
+  while (!all_done && t0.seconds() < 600) {
     std::this_thread::sleep_for(std::chrono::seconds(2));
     const std::string pending = shell(env + " squeue -h -t PD -r -o '%i %r'");
     std::istringstream lines(pending);

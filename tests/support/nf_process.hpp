@@ -53,8 +53,8 @@ inline json json_in(const std::string& output) {
 inline json json_of(const Result& r) { return json_in(r.output); }
 
 // reconstruct's stages in their order, as `nf_gpu reconstruct --help` lists them: a test that walks
-// every stage follows the binary's list rather than keeping a copy of its own.
-inline std::vector<std::string> stage_names() {
+// every stage follows the binary's list rather than keeping a copy of its own (asked once a process).
+inline std::vector<std::string> read_stage_names() {
   const Result help = run("reconstruct --help");
   const std::string marker = "stages, in order: ";
   const std::size_t at = help.output.find(marker);
@@ -68,6 +68,10 @@ inline std::vector<std::string> stage_names() {
     from = comma + 2;
   }
   REQUIRE(names.size() >= 2);
+  return names;
+}
+inline const std::vector<std::string>& stage_names() {
+  static const std::vector<std::string> names = read_stage_names();
   return names;
 }
 
