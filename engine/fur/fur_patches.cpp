@@ -16,6 +16,9 @@ namespace nf::fur {
 namespace {
 
 constexpr std::uint32_t kTile = 16;
+// A texel's flags byte: NativeTargets' flags in the low bits, the Gabor scale in the high four.
+constexpr std::uint8_t kFlagBits = 0x0F, kMaxScale = 15;
+constexpr int kScaleShift = 4;
 
 // One pixel on disk: the flags, the reliability in 1/255 and the angle in pi/65536.
 struct Texel {
@@ -30,8 +33,8 @@ std::string system_error(const std::filesystem::path& file, const char* what) {
 
 }  // namespace
 
-FurPatches::FurPatches(gpu::Context& gpu, const geometry::Mesh& bald, std::filesystem::path dir, std::uint32_t size)
-    : gpu_(gpu), bald_(bald), dir_(std::move(dir)), size_(size) {
+FurPatches::FurPatches(gpu::Context& gpu, const geometry::Mesh& bald, std::filesystem::path dir, std::uint32_t size, Files files)
+    : gpu_(gpu), bald_(bald), dir_(std::move(dir)), size_(size), files_(files) {
   if (size < 16) throw InputError("fur patches: a patch must be at least 16 pixels (got " + std::to_string(size) + ")");
   std::error_code ec;
   std::filesystem::create_directories(dir_, ec);
@@ -39,19 +42,58 @@ FurPatches::FurPatches(gpu::Context& gpu, const geometry::Mesh& bald, std::files
 }
 
 FurPatches::~FurPatches() {
+  if (files_ == Files::kept) return;
   std::error_code ec;
   for (const Stored& v : views_) std::filesystem::remove(v.file, ec);
   std::filesystem::remove(dir_, ec);  // only when empty: nothing else is touched
 }
 
-std::uint32_t FurPatches::add(std::uint32_t camera, const NativeTargets& t) {
+void FurPatches::account(Stored& s, const void* texels, std::uint32_t y) {
+  const Texel* row = static_cast<const Texel*>(texels);
+  for (std::uint32_t x = 0; x < s.crop.width; ++x) {
+    const std::uint8_t f = row[x].flags;
+    if (f & NativeTargets::kFur) ++s.tile_fur[std::size_t(y / kTile) * s.tiles_x + x / kTile];
+    if (f & NativeTargets::kOriented) {
+      s.reliability += row[x].reliability / 255.0, s.oriented += 1;
+      const std::size_t scale = f >> kScaleShift;
+      if (scale_count_.size() <= scale) scale_count_.resize(scale + 1, 0);
+      ++scale_count_[scale];
+    }
+  }
+}
+
+std::uint32_t FurPatches::finish(Stored&& s) {
+  // (account() counted fur per tile and summed the reliability: now the cumulative counts and the mean.)
+  s.reliability = s.oriented > 0 ? s.reliability / s.oriented : 0.0;
+  std::uint64_t total = 0;
+  for (std::uint64_t& k : s.tile_fur) k = total += k;
+  bytes_ += std::uint64_t(s.crop.width) * s.crop.height * sizeof(Texel);
+  views_.push_back(std::move(s));
+  std::uint64_t all = 0;
+  for (std::uint64_t c : scale_count_) all += c;
+  scale_share_.assign(scale_count_.size(), 0.0);
+  for (std::size_t k = 0; k < scale_count_.size(); ++k) scale_share_[k] = all ? double(scale_count_[k]) / double(all) : 0.0;
+  return std::uint32_t(views_.size() - 1);
+}
+
+FurPatches::Stored FurPatches::start(std::uint32_t camera, const io::Camera& crop) const {
+  for (const Stored& v : views_)
+    NF_CHECK(v.camera != camera, "fur patches: camera " + std::to_string(camera) + " stored twice");
   Stored s;
-  s.camera = camera, s.crop = t.crop;
-  s.file = dir_ / ("view_" + std::to_string(views_.size()) + ".nftargets");
+  s.camera = camera, s.crop = crop;
+  s.file = file_of(camera);
+  s.tiles_x = (crop.width + kTile - 1) / kTile, s.tiles_y = (crop.height + kTile - 1) / kTile;
+  s.tile_fur.assign(std::size_t(s.tiles_x) * s.tiles_y, 0);
+  return s;
+}
+
+std::filesystem::path FurPatches::file_of(std::uint32_t camera) const {
+  return dir_ / ("camera_" + std::to_string(camera) + ".nftargets");
+}
+
+std::uint32_t FurPatches::add(std::uint32_t camera, const NativeTargets& t) {
+  Stored s = start(camera, t.crop);
   const std::uint32_t W = t.crop.width, H = t.crop.height;
-  s.tiles_x = (W + kTile - 1) / kTile, s.tiles_y = (H + kTile - 1) / kTile;
-  std::vector<std::uint64_t> fur(std::size_t(s.tiles_x) * s.tiles_y, 0);
-  double reliable = 0, oriented = 0;
   std::vector<Texel> row(W);
   const int fd = ::open(s.file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw InputError(system_error(s.file, "cannot write the view's native targets"));
@@ -64,17 +106,12 @@ std::uint32_t FurPatches::add(std::uint32_t camera, const NativeTargets& t) {
   for (std::uint32_t y = 0; y < H; ++y) {
     for (std::uint32_t x = 0; x < W; ++x) {
       const std::size_t i = std::size_t(y) * W + x;
-      const std::uint8_t f = t.flags[i];
       const float a = std::clamp(t.angle[i], 0.f, float(M_PI));
-      row[x] = {f, std::uint8_t(std::lround(std::clamp(t.confidence[i], 0.f, 1.f) * 255.f)),
+      row[x] = {std::uint8_t((t.flags[i] & kFlagBits) | (std::min<std::uint8_t>(t.scale[i], kMaxScale) << kScaleShift)),
+                std::uint8_t(std::lround(std::clamp(t.confidence[i], 0.f, 1.f) * 255.f)),
                 std::uint16_t(std::lround(a / M_PI * 65536.0) & 0xFFFF)};  // pi wraps to 0: angles are mod pi
-      if (f & NativeTargets::kFur) ++fur[std::size_t(y / kTile) * s.tiles_x + x / kTile];
-      if (f & NativeTargets::kOriented) {
-        reliable += t.confidence[i], oriented += 1;
-        if (scale_count_.size() <= t.scale[i]) scale_count_.resize(t.scale[i] + 1u, 0);
-        ++scale_count_[t.scale[i]];
-      }
     }
+    account(s, row.data(), y);  // from the stored values: a reopened store counts the same
     const std::size_t bytes = std::size_t(W) * sizeof(Texel);
     if (::write(fd, row.data(), bytes) != ssize_t(bytes)) throw fail("cannot write the view's native targets (is the disk full?)");
   }
@@ -83,17 +120,28 @@ std::uint32_t FurPatches::add(std::uint32_t camera, const NativeTargets& t) {
     ::unlink(s.file.c_str());
     throw InputError(message);
   }
-  bytes_ += std::uint64_t(W) * H * sizeof(Texel);
-  s.reliability = oriented > 0 ? reliable / oriented : 0.0;
-  s.tile_fur.resize(fur.size());
-  std::uint64_t total = 0;
-  for (std::size_t k = 0; k < fur.size(); ++k) s.tile_fur[k] = total += fur[k];
-  views_.push_back(std::move(s));
-  std::uint64_t all = 0;
-  for (std::uint64_t c : scale_count_) all += c;
-  scale_share_.assign(scale_count_.size(), 0.0);
-  for (std::size_t k = 0; k < scale_count_.size(); ++k) scale_share_[k] = all ? double(scale_count_[k]) / double(all) : 0.0;
-  return std::uint32_t(views_.size() - 1);
+  return finish(std::move(s));
+}
+
+std::optional<std::uint32_t> FurPatches::reopen(std::uint32_t camera, const io::Camera& crop) {
+  const std::filesystem::path file = file_of(camera);
+  std::error_code ec;
+  const std::uint64_t bytes = std::filesystem::file_size(file, ec);
+  if (ec || bytes != std::uint64_t(crop.width) * crop.height * sizeof(Texel)) return std::nullopt;
+  Stored s = start(camera, crop);
+  std::vector<Texel> row(crop.width);
+  const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return std::nullopt;
+  const std::size_t row_bytes = std::size_t(crop.width) * sizeof(Texel);
+  for (std::uint32_t y = 0; y < crop.height; ++y) {
+    if (::read(fd, row.data(), row_bytes) != ssize_t(row_bytes)) {
+      ::close(fd);
+      return std::nullopt;
+    }
+    account(s, row.data(), y);
+  }
+  ::close(fd);
+  return finish(std::move(s));
 }
 
 PatchPlace FurPatches::place(std::uint32_t view, std::uint64_t seed) const {

@@ -10,7 +10,8 @@
 // bytes a pixel in `dir` and dropped from memory; a patch reads its rows back (pread), and M_bald's
 // depth is rasterised for the patch's camera. During training memory stays a patch's, whatever the
 // photos' size and count (making one view's targets holds that photo's maps for a moment: a few
-// GB for 50 MP); the files go when the store does (they are made anew from the photos every run).
+// GB for 50 MP). The files go when the store does, or (Files::kept: in the fur stage's resume
+// folder) stay for a resumed run to reopen instead of making them anew from the photos.
 //
 // Placement: a patch is centred on a pixel drawn with probability proportional to the fur in its
 // 16 x 16 tile (fur: mask and non-bald), then clamped into the view's crop, so every part of the
@@ -18,6 +19,7 @@
 // patches.
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <vector>
 
 #include "engine/fur/fur_views.hpp"
@@ -31,15 +33,20 @@ struct PatchPlace {
 
 class FurPatches {
  public:
+  enum class Files { removed, kept };  // what becomes of the files when the store goes
   // `size` >= 16. `dir` is created; InputError naming it when it cannot be.
-  FurPatches(gpu::Context& gpu, const geometry::Mesh& bald, std::filesystem::path dir, std::uint32_t size);
-  ~FurPatches();  // removes the files it wrote
+  FurPatches(gpu::Context& gpu, const geometry::Mesh& bald, std::filesystem::path dir, std::uint32_t size, Files files = Files::removed);
+  ~FurPatches();  // removes the files it wrote, unless they are kept
   FurPatches(const FurPatches&) = delete;
   FurPatches& operator=(const FurPatches&) = delete;
 
   // Stores a view's targets (written to disk; `targets` may be dropped after). Returns its index.
   // InputError naming the file when it cannot be written (a full disk).
+  // A camera is stored once (one file per camera in `dir`).
   std::uint32_t add(std::uint32_t camera, const NativeTargets& targets);
+  // The camera's file an earlier store in `dir` kept, with the crop it was made for: its index, or
+  // nullopt when there is no such file or it is not the crop's size (a run killed while writing it).
+  std::optional<std::uint32_t> reopen(std::uint32_t camera, const io::Camera& crop);
 
   std::uint32_t size() const { return std::uint32_t(views_.size()); }
   std::uint32_t patch_size() const { return size_; }
@@ -65,14 +72,19 @@ class FurPatches {
     std::uint32_t camera = 0;
     io::Camera crop;
     std::filesystem::path file;
-    double reliability = 0;
+    double reliability = 0, oriented = 0;
     std::uint32_t tiles_x = 0, tiles_y = 0;
     std::vector<std::uint64_t> tile_fur;  // cumulative fur pixels over the tiles (row-major)
   };
+  std::filesystem::path file_of(std::uint32_t camera) const;
+  Stored start(std::uint32_t camera, const io::Camera& crop) const;
+  void account(Stored& s, const void* texels, std::uint32_t y);  // one stored row's fur, reliability and scales
+  std::uint32_t finish(Stored&& s);
   gpu::Context& gpu_;
   const geometry::Mesh& bald_;
   std::filesystem::path dir_;
   std::uint32_t size_;
+  Files files_;
   std::vector<Stored> views_;
   std::uint64_t bytes_ = 0;
   std::vector<double> scale_share_;

@@ -18,6 +18,7 @@
 #include "engine/fur/baseline_groom.hpp"
 #include "engine/fur/fur_model_file.hpp"
 #include "engine/fur/fur_resolution.hpp"
+#include "engine/fur/fur_view_file.hpp"
 #include "engine/fur/ground_truth_inputs.hpp"
 #include "engine/gpu/context.hpp"
 #include "engine/io/ground_truth.hpp"
@@ -237,7 +238,8 @@ void split_views(const io::Scene& scene, int hold_out_every, std::vector<std::ui
 }
 
 // The views' targets at the stage's resolution, cropped to the masks, and with fur.patch their
-// native targets in a patch store under `scratch`; returns the log's figures.
+// native targets in a patch store under `scratch` (the stage's resume folder), where the views an
+// interrupted run finished are read back from; returns the log's figures.
 json make_views(StageContext& c, const FurSettings& s, FurInputs& in, const fs::path& scratch) {
   std::vector<std::uint32_t> train_ids, held_ids;
   split_views(c.scene, s.hold_out_every, train_ids, held_ids);
@@ -248,24 +250,23 @@ json make_views(StageContext& c, const FurSettings& s, FurInputs& in, const fs::
   view_options.max_side = s.resolution, view_options.margin_px = s.margin_px;
   view_options.true_orientation = s.orientation_target == "truth";
   const fs::path masks = defur_outputs(c.work).masks();
+  // The native targets stay in `scratch` (the stage's resume folder, which the pipeline removes once
+  // the stage is done) with the views' files: a resumed run reads back the views its last run made.
   if (s.patch) {
-    in.patches = std::make_unique<fur::FurPatches>(c.gpu, in.bald, scratch / "patches", s.patch);
+    in.patches = std::make_unique<fur::FurPatches>(c.gpu, in.bald, scratch / "patches", s.patch, fur::FurPatches::Files::kept);
     in.data.patches = in.patches.get();
   }
   // Held-out views' native targets go to a store of their own, which only their fixed patches outlive.
   std::unique_ptr<fur::FurPatches> held_store;
-  if (s.patch) held_store = std::make_unique<fur::FurPatches>(c.gpu, in.bald, scratch / "held_out_patches", s.patch);
+  if (s.patch) held_store = std::make_unique<fur::FurPatches>(c.gpu, in.bald, scratch / "held_out_patches", s.patch, fur::FurPatches::Files::kept);
+  const fs::path kept = scratch / "views";
+  fs::create_directories(kept);
   std::uint32_t most_scales = 1;
   // Minutes for photos of several megapixels (their Gabor maps at full resolution): a progress line.
   Progress progress("fur views", train_ids.size() + held_ids.size());
-  std::size_t prepared = 0;
+  std::size_t prepared = 0, read_back = 0;
   const auto make = [&](const std::vector<std::uint32_t>& ids, std::vector<fur::FurView>& views, fur::FurPatches* store) {
     for (std::uint32_t v : ids) {
-      const fs::path nonbald_file = masks / (names[v] + ".png");
-      // The defur stage's non-bald masks belong to the pipeline's M_bald, not to the true one.
-      const std::optional<io::Image> nonbald =
-          s.truth != "all" && fs::exists(nonbald_file) ? std::optional(io::read_image(nonbald_file)) : std::nullopt;
-      fur::NativeTargets native;
       fur::FurViewOptions o = view_options;
       if (store) {
         // The scales the photo's strands need (fur_resolution.hpp), from the fur's length in it.
@@ -276,8 +277,21 @@ json make_views(StageContext& c, const FurSettings& s, FurInputs& in, const fs::
                                             : fur::gabor_scales_for(fur::fur_length_pixels(probe, in.data.roots), s.training.resolved_fur_px, s.gabor_scales);
         most_scales = std::max(most_scales, o.gabor_scales);
       }
-      views.push_back(fur::make_fur_view(c.gpu, c.scene, v, nonbald ? &*nonbald : nullptr, in.bald, o, store ? &native : nullptr));
-      if (store) store->add(v, native);
+      const fs::path file = kept / ("camera_" + std::to_string(v) + ".nfview");
+      if (std::optional<fur::StoredFurView> stored = fur::read_fur_view(file, c.scene);
+          stored && (!store || (stored->native_crop && store->reopen(v, *stored->native_crop)))) {
+        views.push_back(std::move(stored->view));
+        ++read_back;
+      } else {
+        const fs::path nonbald_file = masks / (names[v] + ".png");
+        // The defur stage's non-bald masks belong to the pipeline's M_bald, not to the true one.
+        const std::optional<io::Image> nonbald =
+            s.truth != "all" && fs::exists(nonbald_file) ? std::optional(io::read_image(nonbald_file)) : std::nullopt;
+        fur::NativeTargets native;
+        views.push_back(fur::make_fur_view(c.gpu, c.scene, v, nonbald ? &*nonbald : nullptr, in.bald, o, store ? &native : nullptr));
+        if (store) store->add(v, native);
+        fur::write_fur_view(file, views.back(), store ? &native.crop : nullptr);  // after the native targets: it says they are whole
+      }
       progress.update(++prepared, "camera " + c.scene.cameras[v].name);
     }
   };
@@ -289,6 +303,7 @@ json make_views(StageContext& c, const FurSettings& s, FurInputs& in, const fs::
     throw;
   }
   progress.finish();
+  if (read_back) log::info("fur: ", read_back, " of ", prepared, " views' targets read back from the interrupted run");
   if (held_store)
     for (std::uint32_t h = 0; h < held_store->size(); ++h)
       // Seeded by the camera alone: runs of other seeds are scored on the same patches.
@@ -305,7 +320,7 @@ json make_views(StageContext& c, const FurSettings& s, FurInputs& in, const fs::
   log::info("fur: ", in.data.roots.size(), " roots, ", in.data.train.size(), " training views and ", in.data.held_out.size(),
             " held out; rendering ", per_view, " pixels a view (", full ? 100.0 * double(rendered) / double(full) : 0.0, " % of the photos' pixels)");
   if (in.data.train.empty()) log::warn("fur: no view has a photo and a mask; only the geometric losses will shape the fur");
-  json figures{{"train", in.data.train.size()}, {"held_out", in.data.held_out.size()}, {"orientation_reliability", reliability},
+  json figures{{"train", in.data.train.size()}, {"held_out", in.data.held_out.size()}, {"read_back", read_back}, {"orientation_reliability", reliability},
                {"rendered_pixels_per_view", per_view}, {"rendered_fraction_of_photo", full ? double(rendered) / double(full) : 0.0}};
   if (in.patches) {
     double native = 0;

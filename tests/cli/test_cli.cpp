@@ -478,6 +478,26 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   CHECK(fur_summary["held_out"]["truth"]["silhouette_iou"].get<double>() > 0.0);
   const Result metrics_cmd = run("metrics --pred " + (work / "fur" / "strands.hair").string() + " --strands 200 --json");
   CHECK(metrics_cmd.code == 0);  // scale.json beside the strands declares the unit
+  {
+    // A groom made at a wrong scale (--scene-scale 70 where the truth is 100) is judged at the
+    // truth's: its straight baseline, grown 100/70 times too long in scene units, measures that much
+    // longer in cm, and metrics.json says which scale judged it (in a copy: `work` keeps its cache).
+    const fs::path scaled_work = work.string() + "-scaled";
+    fs::remove_all(scaled_work);
+    fs::copy(work, scaled_work, fs::copy_options::recursive);
+    const Result scaled = run("reconstruct --scene " + scene.string() + " --out " + scaled_work.string() + tiny + body +
+                              " --set knowledge.preset=cat" + small + " --scene-scale 70 --from knowledge --to fur");
+    INFO(scaled.output);
+    REQUIRE(scaled.code == 0);
+    CHECK(scaled.output.find("the scores against the truth use the truth's") != std::string::npos);
+    const nf::json wrong = nf::json::parse(slurp(scaled_work / "fur" / "metrics.json"));
+    CHECK(nf::json::parse(slurp(scaled_work / "fur" / "scale.json"))["cm_per_unit"].get<double>() == 70.0);
+    CHECK(wrong["ground_truth"]["cm_per_unit"].get<double>() == 100.0);
+    const double ratio = wrong["baseline"]["consistency"]["length_mean_cm"].get<double>() /
+                         fur_summary["baseline"]["consistency"]["length_mean_cm"].get<double>();
+    CHECK(ratio == doctest::Approx(100.0 / 70.0).epsilon(0.1));
+    fs::remove_all(scaled_work);
+  }
   // The export stage: the groom in four formats and the rigged body, in metres, upright.
   for (const char* f : {"export/fur.usda", "export/fur.hair", "export/fur.ply", "export/fur.obj", "export/body.glb", "export/roots.npz",
                         "export/export.json", "export/turntable.png", "export/turntable_000.png"})

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <optional>
 
 #include "engine/core/error.hpp"
 #include "engine/fur/fur_patches.hpp"
@@ -88,9 +89,10 @@ TEST_CASE("fur patches: a patch reads back the stored targets at the view's came
         REQUIRE(v.body_depth[o] == doctest::Approx(2.0).epsilon(1e-4));  // the wall, seen through the patch's camera
       }
     // The orientation loss's scale: the mean reliability over the oriented fur.
+    // (Of the stored reliabilities, in 1/255: a reopened store computes the same.)
     double sum = 0, count = 0;
     for (std::size_t i = 0; i < t.flags.size(); ++i)
-      if (t.flags[i] & NativeTargets::kOriented) sum += t.confidence[i], count += 1;
+      if (t.flags[i] & NativeTargets::kOriented) sum += std::lround(t.confidence[i] * 255.f) / 255.0, count += 1;
     CHECK(store.orientation_reliability(0) == doctest::Approx(sum / count).epsilon(1e-9));
     CHECK(v.orientation_reliability == store.orientation_reliability(0));
     // A lost file is an error naming it, not a crash or zeros.
@@ -99,7 +101,7 @@ TEST_CASE("fur patches: a patch reads back the stored targets at the view's came
       store.cut(0, p);
       FAIL("a removed file was read");
     } catch (const InputError& e) {
-      CHECK(std::string(e.what()).find("view_0.nftargets") != std::string::npos);
+      CHECK(std::string(e.what()).find("camera_7.nftargets") != std::string::npos);
     }
   }
   CHECK_FALSE(fs::exists(dir));  // the store removes its folder
@@ -144,4 +146,48 @@ TEST_CASE("fur patches: placed on the fur in proportion to its area, every part 
   REQUIRE(one.size() == 1);
   CHECK(one[0] == PatchPlace{0, 0, 360, 200});
   CHECK_THROWS_AS(FurPatches(ctx, body, dir / "tiny", 8), InputError);
+}
+
+TEST_CASE("fur patches: a kept store's files are reopened by a later store with the same places, cuts and figures; a file not whole is not") {
+  gpu::Context& ctx = test::context();
+  const fs::path dir = fs::temp_directory_path() / "nf_test_fur_patches_kept";
+  fs::remove_all(dir);
+  const geometry::Mesh body = wall();
+  const NativeTargets t = two_discs(360, 200);
+  NativeTargets other = two_discs(200, 120);
+  other.crop.name = "other";
+  std::vector<PatchPlace> places;
+  FurView cut;
+  double reliability = 0;
+  std::vector<double> share;
+  {
+    FurPatches store(ctx, body, dir, 48, FurPatches::Files::kept);
+    store.add(3, t);
+    store.add(5, other);
+    CHECK_THROWS(store.add(3, t));  // one file per camera
+    places = store.places(0, 8, 21);
+    cut = store.cut(0, places[2]);
+    reliability = store.orientation_reliability(0), share = store.scale_share();
+  }
+  REQUIRE(fs::exists(dir / "camera_3.nftargets"));  // kept when the store goes
+  {
+    FurPatches again(ctx, body, dir, 48);
+    REQUIRE(again.reopen(3, t.crop) == std::optional<std::uint32_t>(0));
+    CHECK(again.camera(0) == 3);
+    CHECK(again.places(0, 8, 21) == places);
+    CHECK(again.orientation_reliability(0) == reliability);
+    CHECK(again.fur_pixels(0) > 0);
+    const FurView v = again.cut(0, places[2]);
+    CHECK(v.gabor_angle == cut.gabor_angle);
+    CHECK(v.gabor_confidence == cut.gabor_confidence);
+    CHECK(v.orientation_weight == cut.orientation_weight);
+    CHECK(v.silhouette_weight == cut.silhouette_weight);
+    CHECK(!again.reopen(4, t.crop));        // no file for that camera
+    CHECK(!again.reopen(5, t.crop));        // a file of another size than the crop
+    fs::resize_file(dir / "camera_5.nftargets", 1000);  // a run killed while writing it
+    CHECK(!again.reopen(5, other.crop));
+    again.add(5, other);                    // made anew
+    CHECK(again.scale_share() == share);    // the scales of both views counted once each
+  }
+  CHECK_FALSE(fs::exists(dir));  // removed by the store that did not keep them
 }

@@ -1,12 +1,15 @@
 // The fur stage's views with the scene's true orientation as the target (fur.orientation_target=
 // truth): the native targets hold the true map itself, the view's coarse angle is its average, and
-// a scene without the maps is refused naming the file and how to make it.
+// a scene without the maps is refused naming the file and how to make it; a view kept for a resumed
+// run reads back as it was written.
 #include <doctest/doctest.h>
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 
 #include "engine/core/error.hpp"
+#include "engine/fur/fur_view_file.hpp"
 #include "engine/fur/fur_views.hpp"
 #include "engine/io/ground_truth.hpp"
 #include "engine/io/mesh.hpp"
@@ -66,6 +69,39 @@ TEST_CASE("fur views: the true orientation replaces the Gabor map, at native res
     }
   CHECK(coarse > 50);
   CHECK(view.orientation_reliability > 0.3);  // the true map is coherent where strands lie side by side
+
+  // Kept for a resumed run: read back as written, with the scene's camera; a file not whole, of
+  // another camera or not a view file is made anew (nullopt), never trusted.
+  const fs::path kept = dir / "camera_0.nfview";
+  fur::write_fur_view(kept, view, &native.crop);
+  const std::optional<fur::StoredFurView> back = fur::read_fur_view(kept, scene);
+  REQUIRE(back);
+  CHECK(back->view.camera == 0);
+  CHECK(back->view.crop.name == scene.cameras[0].name);
+  CHECK(back->view.crop.camera_to_world == view.crop.camera_to_world);
+  CHECK(back->view.crop.image == scene.cameras[0].image);
+  CHECK(back->view.crop.width == view.crop.width);
+  CHECK(back->view.crop.cx == view.crop.cx);
+  CHECK(back->view.crop.fy == view.crop.fy);
+  CHECK(back->view.scale == view.scale);
+  CHECK(back->view.orientation_reliability == view.orientation_reliability);
+  for (auto [a, b] : {std::pair{&back->view.mask, &view.mask}, {&back->view.silhouette_weight, &view.silhouette_weight},
+                      {&back->view.orientation_weight, &view.orientation_weight}, {&back->view.gabor_angle, &view.gabor_angle},
+                      {&back->view.gabor_confidence, &view.gabor_confidence}, {&back->view.body_depth, &view.body_depth}, {&back->view.rgb, &view.rgb}})
+    CHECK(*a == *b);
+  REQUIRE(back->native_crop);
+  CHECK(back->native_crop->width == native.crop.width);
+  CHECK(back->native_crop->cx == native.crop.cx);
+  fur::write_fur_view(dir / "no_native.nfview", view, nullptr);
+  CHECK_FALSE(fur::read_fur_view(dir / "no_native.nfview", scene)->native_crop);
+  CHECK_FALSE(fur::read_fur_view(dir / "missing.nfview", scene));
+  io::Scene renamed = scene;
+  renamed.cameras[0].name = "another";
+  CHECK_FALSE(fur::read_fur_view(kept, renamed));
+  fs::resize_file(kept, fs::file_size(kept) - 5);  // a file cut short
+  CHECK_FALSE(fur::read_fur_view(kept, scene));
+  std::ofstream(kept, std::ios::trunc) << "not a view";
+  CHECK_FALSE(fur::read_fur_view(kept, scene));
 
   // Without the maps: refused, naming the file and the flag that writes it.
   fs::remove_all(dir / "scene" / "gt" / "orientation");

@@ -160,6 +160,20 @@ def small_files():
     record = {"stage": "fur", "key": {"version": 1, "parameters": {"steps": 300}, "inputs": {"WORK/frames/roots.npz": "ab12"}},
               "summary": {"strands": 1000, "f_score": {"2cm_20": 91.0}}, "seconds": 12.5, "finished": "2026-12-01T10:00:00Z"}
     put("stage_record", "stage.json", json.dumps(record, indent=2) + "\n")
+    put("fur_view", "native.nfview", fur_view(True))
+    put("fur_view", "whole.nfview", fur_view(False))
+
+
+def fur_view(native):
+    # A 3 x 2 crop of camera "000" (64 x 48) at half scale, with or without a native crop.
+    n = 6
+    crop = struct.pack("<II4d", 3, 2, 30.0, 30.0, 1.5, 1.0)
+    body = b"NFFURVW\0" + struct.pack("<II", 1, 0) + struct.pack("<I", 3) + b"000" + crop + struct.pack("<2d", 0.4, 0.5)
+    for k in range(6):
+        body += struct.pack("<Q", n) + struct.pack("<6f", *[0.1 * (i + k) for i in range(n)])
+    body += struct.pack("<Q", 3 * n) + struct.pack("<18f", *[0.05 * i for i in range(3 * n)])
+    body += struct.pack("<B", 1) + struct.pack("<II4d", 6, 4, 60.0, 60.0, 3.0, 2.0) if native else struct.pack("<B", 0)
+    return body
 
 
 def vlm_answers():
