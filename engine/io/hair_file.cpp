@@ -95,7 +95,7 @@ void write_hair(const std::filesystem::path& path, const StrandStream& s) {
   std::memcpy(h.signature, "HAIR", 4);
   h.hair_count = std::uint32_t(s.strands);
   h.point_count = std::uint32_t(s.points);
-  h.arrays = kPoints | (uniform ? 0u : kSegments) | (s.width ? kThickness : 0u);
+  h.arrays = kPoints | (uniform ? 0u : kSegments) | (s.width ? kThickness : 0u) | (s.color ? kColors : 0u);
   h.default_segments = uniform ? first_count - 1 : 0;
   h.default_thickness = 1.f;
   h.default_color[0] = h.default_color[1] = h.default_color[2] = 1.f;
@@ -121,6 +121,12 @@ void write_hair(const std::filesystem::path& path, const StrandStream& s) {
         for (std::uint32_t k = 0, n = s.points_in(i); k < n; ++k) {
           const float w = s.width(i, k);
           out.write(reinterpret_cast<const char*>(&w), 4);
+        }
+    if (s.color)  // (the format's colour array follows the thickness and transparency arrays)
+      for (std::uint64_t i = 0; i < s.strands; ++i)
+        for (std::uint32_t k = 0, n = s.points_in(i); k < n; ++k) {
+          const glm::vec3 c = s.color(i, k);
+          out.write(reinterpret_cast<const char*>(&c.x), 12);
         }
   });
 }

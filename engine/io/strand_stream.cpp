@@ -18,6 +18,11 @@ StrandStream StrandStream::of(const StrandSet& set) {
   if (!set.thickness.empty())
     s.width = [&set](std::uint64_t i, std::uint32_t k) { return set.thickness[set.offsets[i] + k]; };
   if (!set.regions.empty()) s.region = [&set](std::uint64_t i) { return std::int32_t(set.regions[i]); };
+  if (!set.colors.empty())
+    s.color = [&set](std::uint64_t i, std::uint32_t k) {
+      const float* c = &set.colors[3 * (std::size_t(set.offsets[i]) + k)];
+      return glm::vec3(c[0], c[1], c[2]);
+    };
   return s;
 }
 

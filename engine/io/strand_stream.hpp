@@ -8,6 +8,8 @@
 #include <functional>
 #include <span>
 
+#include <glm/glm.hpp>
+
 #include "engine/io/file_frame.hpp"
 #include "engine/io/strands.hpp"
 
@@ -22,9 +24,10 @@ struct StrandStream {
   std::function<void(const PointSink& sink)> each_chunk;
   std::function<float(std::uint64_t strand, std::uint32_t k)> width;  // per point, scene units; empty: none
   std::function<std::int32_t(std::uint64_t strand)> region;           // empty: none
+  std::function<glm::vec3(std::uint64_t strand, std::uint32_t k)> color;  // per point, linear RGB; empty: none
   FileFrame frame = FileFrame::scene;                                   // stated in the file (file_frame.hpp)
 
-  // A view of `set` (which must outlive it): its thickness as widths, its regions.
+  // A view of `set` (which must outlive it): its thickness as widths, its regions and colours.
   static StrandStream of(const StrandSet& set);
 };
 

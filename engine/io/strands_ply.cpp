@@ -1,11 +1,15 @@
 // Strands as binary little-endian PLY: vertices, the chains as `edge` elements (vertex1, vertex2)
 // that Blender and most tools import, and a `strand` element (first, count, region) that keeps the
-// strands exact for nf_gpu and anyone who reads it. The header is parsed by ply_header.cpp, shared
+// strands exact for nf_gpu and anyone who reads it. Colours, when the groom has them, are the
+// vertices' red, green and blue (8-bit sRGB). The header is parsed by ply_header.cpp, shared
 // with the mesh reader.
 #include <algorithm>
+#include <cmath>
+#include <cstring>
 #include <sstream>
 
 #include "engine/core/atomic_file.hpp"
+#include "engine/core/color.hpp"
 #include "engine/io/binary_io.hpp"
 #include "engine/io/ply_header.hpp"
 #include "engine/io/strand_files.hpp"
@@ -26,12 +30,13 @@ void write_strands_ply(const std::filesystem::path& path, const StrandStream& s)
     for (std::uint64_t i = 0; i < s.strands; ++i) nonempty += s.points_in(i) ? 1 : 0;
     return nonempty;
   }();
-  const bool thick = bool(s.width);
+  const bool thick = bool(s.width), colored = bool(s.color);
   std::ostringstream header;
   header << "ply\nformat binary_little_endian 1.0\ncomment nf_gpu strands: polylines as vertex chains\ncomment " << frame_marker(s.frame)
          << (s.frame == FileFrame::exported ? " (metres, +y up, the animal facing +z; export.json beside it maps the scene to it)" : "") << "\n"
          << "element vertex " << s.points << "\nproperty float x\nproperty float y\nproperty float z\n"
-         << (thick ? "property float thickness\n" : "") << "element edge " << edges
+         << (thick ? "property float thickness\n" : "")
+         << (colored ? "property uchar red\nproperty uchar green\nproperty uchar blue\n" : "") << "element edge " << edges
          << "\nproperty int vertex1\nproperty int vertex2\n"
          << "element strand " << s.strands << "\nproperty int first\nproperty int count\nproperty ushort region\n"
          << "end_header\n";
@@ -39,19 +44,30 @@ void write_strands_ply(const std::filesystem::path& path, const StrandStream& s)
     out << header.str();
     std::uint64_t written = 0;
     StrandCursor at(s);
-    std::vector<float> interleaved;
+    // A vertex record: x y z, the thickness, the colour as 8-bit sRGB (what Blender and most
+    // viewers read as vertex colours).
+    const std::size_t stride = 12 + (thick ? 4 : 0) + (colored ? 3 : 0);
+    std::vector<char> records;
     s.each_chunk([&](std::span<const float> xyz) {
       require_finite_points(path, xyz, 3 * written);
       const std::size_t n = xyz.size() / 3;
-      if (!thick) {
+      if (!thick && !colored) {
         out.write(reinterpret_cast<const char*>(xyz.data()), std::streamsize(xyz.size() * 4));
       } else {
-        interleaved.resize(4 * n);
+        records.resize(stride * n);
         for (std::size_t p = 0; p < n; ++p, at.next()) {
-          for (int a = 0; a < 3; ++a) interleaved[4 * p + std::size_t(a)] = xyz[3 * p + std::size_t(a)];
-          interleaved[4 * p + 3] = s.width(at.strand(), at.k());
+          char* r = records.data() + stride * p;
+          std::memcpy(r, &xyz[3 * p], 12);
+          if (thick) {
+            const float w = s.width(at.strand(), at.k());
+            std::memcpy(r + 12, &w, 4);
+          }
+          if (colored) {
+            const glm::vec3 c = color::linear_to_srgb(s.color(at.strand(), at.k()));
+            for (int a = 0; a < 3; ++a) r[12 + (thick ? 4 : 0) + a] = char(std::uint8_t(std::lround(c[a] * 255.f)));
+          }
         }
-        out.write(reinterpret_cast<const char*>(interleaved.data()), std::streamsize(interleaved.size() * 4));
+        out.write(records.data(), std::streamsize(records.size()));
       }
       written += n;
     });
@@ -84,7 +100,7 @@ StrandSet read_strands_ply(const std::filesystem::path& path) {
     throw InputError(where + ": only binary little-endian strand PLY files are read (format line)");
   // Element counts and the layout as "element:type:name" words.
   std::uint64_t vertices = 0, edges = 0, strands = 0;
-  bool thick = false, has_strand_element = false;
+  bool thick = false, colored = false, has_strand_element = false;
   std::string layout, order;
   for (const PlyElement& e : header.elements) {
     order += e.name + " ";
@@ -98,26 +114,32 @@ StrandSet read_strands_ply(const std::filesystem::path& path) {
     for (const PlyProperty& p : e.properties) {
       layout += e.name + ":" + (p.list ? "list" : ply_type_name(p.type)) + ":" + p.name + " ";
       if (e.name == "vertex" && p.name == "thickness") thick = true;
+      if (e.name == "vertex" && p.name == "red") colored = true;
     }
   }
   const std::string expected =
       std::string("vertex:float:x vertex:float:y vertex:float:z ") + (thick ? "vertex:float:thickness " : "") +
+      (colored ? "vertex:uchar:red vertex:uchar:green vertex:uchar:blue " : "") +
       "edge:int:vertex1 edge:int:vertex2 " + (has_strand_element ? "strand:int:first strand:int:count strand:ushort:region " : "");
   if (layout != expected || (order != "vertex edge " && order != "vertex edge strand "))
-    throw InputError(where + ": strand PLY layout is not the one nf_gpu reads (vertex x y z [thickness] as float, "
+    throw InputError(where + ": strand PLY layout is not the one nf_gpu reads (vertex x y z [thickness] as float [red green blue as uchar], "
                              "edge vertex1 vertex2 as int, strand first count as int and region as ushort)");
   ByteReader in(bytes, where);
   in.seek(header.data_offset);
-  const std::uint64_t stride = thick ? 4 : 3;
-  if (vertices > in.remaining() / (4 * stride)) throw InputError(where + ": vertex count " + std::to_string(vertices) + " exceeds the file (truncated?)");
-  std::vector<float> raw(vertices * stride);
+  const std::uint64_t stride = 12 + (thick ? 4 : 0) + (colored ? 3 : 0);
+  if (vertices > in.remaining() / stride) throw InputError(where + ": vertex count " + std::to_string(vertices) + " exceeds the file (truncated?)");
+  std::vector<char> raw(vertices * stride);
   in.read(raw.data(), raw.size(), "vertex data");
   StrandSet s;
   s.points.resize(vertices * 3);
   if (thick) s.thickness.resize(vertices);
+  if (colored) s.colors.resize(vertices * 3);
   for (std::uint64_t v = 0; v < vertices; ++v) {
-    for (int a = 0; a < 3; ++a) s.points[3 * v + a] = raw[stride * v + a];
-    if (thick) s.thickness[v] = raw[stride * v + 3];
+    const char* r = raw.data() + stride * v;
+    std::memcpy(&s.points[3 * v], r, 12);
+    if (thick) std::memcpy(&s.thickness[v], r + 12, 4);
+    if (colored)
+      for (int a = 0; a < 3; ++a) s.colors[3 * v + std::size_t(a)] = color::srgb_to_linear(float(std::uint8_t(r[12 + (thick ? 4 : 0) + a])) / 255.f);
   }
   if (edges > in.remaining() / 8) throw InputError(where + ": edge count " + std::to_string(edges) + " exceeds the file (truncated?)");
   std::vector<std::int32_t> e(edges * 2);

@@ -1,5 +1,6 @@
 // Strands as a USD stage in text form: an Xform "animal" holding one BasisCurves prim (linear), per-vertex
-// widths, the region of each strand as a uniform int primvar, and optionally the body as a Mesh prim.
+// widths, the colours per vertex (primvars:displayColor, linear) when the groom has them, the region of each
+// strand as a uniform int primvar, and optionally the body as a Mesh prim.
 // Read back (the curves only) by a parser of exactly that subset.
 #include <cctype>
 #include <charconv>
@@ -152,6 +153,18 @@ void write_strands_usda(const std::filesystem::path& path, const StrandStream& s
         }
       out << "] (\n            interpolation = \"vertex\"\n        )\n";
     }
+    if (s.color) {
+      // USD's displayColor is linear; Blender's importer and usdview show it on the curves.
+      out << "        color3f[] primvars:displayColor = [";
+      std::uint64_t p = 0;
+      for (std::uint64_t i = 0; i < s.strands; ++i)
+        for (std::uint32_t k = 0, n = s.points_in(i); k < n; ++k, ++p) {
+          if (p) out << ((p % 16) ? ", " : ",\n        ");
+          const glm::vec3 c = s.color(i, k);
+          put_tuple(out, &c.x, 3);
+        }
+      out << "] (\n            interpolation = \"vertex\"\n        )\n";
+    }
     if (s.region) {
       out << "        int[] primvars:region = ";
       put_array(out, s.strands, [&](std::uint64_t i) { put_integer(out, s.region(i)); });
@@ -191,6 +204,7 @@ StrandSet read_strands_usda(const std::filesystem::path& path) {
   const auto points = numbers_after(prim, "point3f[] points", where);
   const auto widths = numbers_after(prim, "float[] widths", where);
   const auto regions = numbers_after(prim, "primvars:region", where);
+  const auto colors = numbers_after(prim, "primvars:displayColor", where);
   StrandSet s;
   if (!counts.empty()) s.offsets.push_back(0);
   for (double c : counts) {
@@ -200,6 +214,7 @@ StrandSet read_strands_usda(const std::filesystem::path& path) {
   }
   s.points.assign(points.begin(), points.end());
   s.thickness.assign(widths.begin(), widths.end());
+  s.colors.assign(colors.begin(), colors.end());
   for (double r : regions) {
     if (!(r >= 0 && r <= 65535) || r != std::floor(r)) throw InputError(where + ": primvars:region holds " + std::to_string(r));
     s.regions.push_back(std::uint16_t(r));

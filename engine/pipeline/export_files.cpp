@@ -10,6 +10,7 @@
 #include "engine/core/log.hpp"
 #include "engine/core/stopwatch.hpp"
 #include "engine/fur/fur_views.hpp"
+#include "engine/fur/strand_colors.hpp"
 #include "engine/geometry/mesh_tools.hpp"
 #include "engine/io/image.hpp"
 #include "engine/io/mesh.hpp"
@@ -111,7 +112,8 @@ json write_export(OutputFolder& folder, const GroomInput& g, const ExportScene& 
   json seconds = json::object(), files = json::array();
   Stopwatch t;
   const std::uint64_t n = g.strands.strands;
-  if (g.region.size() != n || g.root_face.size() != n || g.root_barycentric.size() != n)
+  if (g.region.size() != n || g.root_face.size() != n || g.root_barycentric.size() != n ||
+      (g.color_controls && g.colors.size() != n * g.color_controls * 3))
     throw InternalError("export: per-strand arrays do not match the strand count");
   NF_CHECK(sc.bald_world && sc.skeleton, "export: the body and its skeleton are needed");
   const geometry::Mesh body_export = exporter::to_export(*sc.bald_world, sc.frame);
@@ -134,6 +136,11 @@ json write_export(OutputFolder& folder, const GroomInput& g, const ExportScene& 
     return float(double(w) * (1.0 - taper * (count > 1 ? double(k) / double(count - 1) : 0.0)));
   };
   s.region = [&g](std::uint64_t i) { return g.region[i]; };
+  if (g.color_controls)
+    s.color = [&g, &s](std::uint64_t i, std::uint32_t k) {
+      const std::uint32_t count = s.points_in(i);
+      return fur::control_color(&g.colors[std::size_t(i) * g.color_controls * 3], g.color_controls, count > 1 ? float(k) / float(count - 1) : 1.f);
+    };
 
   for (const std::string& f : o.format_list()) {
     t.restart();
@@ -197,7 +204,11 @@ json write_export(OutputFolder& folder, const GroomInput& g, const ExportScene& 
       });
     }
     synth::StrandLook look;
-    for (std::uint64_t i = 0; i < n; i += every) look.root_colors.push_back(synth::linear(synth::palette_color(g.region[i])));
+    // The strands' own colours (their tip's: the renderer shades the root side darker), else their
+    // regions' palette.
+    for (std::uint64_t i = 0; i < n; i += every)
+      look.root_colors.push_back(g.color_controls ? fur::control_color(&g.colors[std::size_t(i) * g.color_controls * 3], g.color_controls, 1.f)
+                                                  : synth::linear(synth::palette_color(g.region[i])));
     const geometry::Bounds box = geometry::mesh_bounds(posed_export);
     const glm::vec3 centre = 0.5f * (box.lo + box.hi);
     const float radius = 0.5f * glm::length(box.hi - box.lo);

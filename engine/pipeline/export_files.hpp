@@ -40,6 +40,10 @@ struct GroomInput {
   std::vector<std::int32_t> region;
   std::vector<std::uint32_t> root_face;
   std::vector<glm::vec3> root_barycentric;
+  // The fur stage's colours (fur/strand_colors.hpp): `color_controls` per strand (strands x controls
+  // x 3, linear RGB), or none.
+  std::uint32_t color_controls = 0;
+  std::vector<float> colors;
 };
 
 struct ExportScene {

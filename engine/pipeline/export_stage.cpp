@@ -1,10 +1,14 @@
 #include "engine/pipeline/export_stage.hpp"
 
+#include <cmath>
+
 #include "engine/core/error.hpp"
 #include "engine/core/log.hpp"
+#include "engine/core/parallel.hpp"
 #include "engine/export/body_rig.hpp"
 #include "engine/export/region_edits.hpp"
 #include "engine/fur/roots.hpp"
+#include "engine/geometry/point_index.hpp"
 #include "engine/io/json_fields.hpp"
 #include "engine/io/mesh.hpp"
 #include "engine/io/npz.hpp"
@@ -20,7 +24,7 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 1;
+constexpr int kStageVersion = 2;  // 2: the strands' colours
 
 ExportOptions export_preset(const std::string& quality) {
   ExportOptions o;
@@ -85,7 +89,39 @@ ExportOptions preview_options(const std::string& quality, const std::string& for
   return o;
 }
 
-GroomInput read_groom(const fs::path& strands, const fs::path& regions, const fs::path& roots_file) {
+namespace {
+
+// The fur stage's colours for strands rooted at `roots` (see read_groom).
+void attach_fur_colors(GroomInput& g, const fur::Roots& roots, const fs::path& work) {
+  const FurOutputs f = fur_outputs(work);
+  if (!fs::exists(f.colors())) return;  // a groom without colours (fur.color_controls=0, or an older fur stage)
+  const io::NpyArray rgb = io::read_npz_array(f.colors(), "rgb");
+  const fs::path colored_roots_file = groom_roots_file(work);
+  const fur::Roots colored = fur::read_roots(colored_roots_file);
+  if (rgb.shape.size() != 3 || rgb.shape[0] != colored.size() || rgb.shape[1] == 0 || rgb.shape[1] > 64 || rgb.shape[2] != 3)
+    throw InputError(f.colors().string() + ": 'rgb' should be " + std::to_string(colored.size()) + " x controls x 3 (one row per root of " +
+                     colored_roots_file.string() + "); rerun the fur stage");
+  for (double v : rgb.values)
+    if (!std::isfinite(v) || v < 0) throw InputError(f.colors().string() + ": 'rgb' holds " + std::to_string(v) + "; rerun the fur stage");
+  g.color_controls = std::uint32_t(rgb.shape[1]);
+  const std::size_t per = std::size_t(g.color_controls) * 3;
+  std::vector<float> positions;
+  positions.reserve(3 * colored.size());
+  for (const glm::vec3& p : colored.position) positions.insert(positions.end(), {p.x, p.y, p.z});
+  const geometry::PointIndex index(positions);
+  g.colors.resize(roots.size() * per);
+  parallel_for(roots.size(), [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const float q[3] = {roots.position[i].x, roots.position[i].y, roots.position[i].z};
+      const std::size_t from = std::size_t(index.nearest(q).first) * per;
+      for (std::size_t k = 0; k < per; ++k) g.colors[i * per + k] = float(rgb.values[from + k]);
+    }
+  });
+}
+
+}  // namespace
+
+GroomInput read_groom(const fs::path& strands, const fs::path& regions, const fs::path& roots_file, const fs::path& work) {
   GroomInput g;
   g.strands = io::stream_hair_file(strands);
   const io::NpyArray region = io::read_npz_array(regions, "region");
@@ -100,6 +136,7 @@ GroomInput read_groom(const fs::path& strands, const fs::path& regions, const fs
   g.region.assign(region.values.begin(), region.values.end());
   g.root_face = roots.face;
   g.root_barycentric = roots.barycentric;
+  attach_fur_colors(g, roots, work);
   return g;
 }
 
@@ -109,6 +146,7 @@ std::vector<fs::path> ExportStage::inputs(const StageContext& c) const {
   std::vector<fs::path> files{f.strands(), f.regions(), f.metrics(), defur_outputs(c.work).bald(), b.fit_state(), b.animal_frame(),
                               knowledge_outputs(c.work).knowledge(), knowledge_outputs(c.work).scale()};
   if (fs::exists(f.roots())) files.push_back(f.roots());
+  if (fs::exists(f.colors())) files.push_back(f.colors());
   const std::string model = resolve_settings(body_settings(), c).model;
   if (!model.empty()) files.push_back(model);
   return files;
@@ -130,7 +168,7 @@ json ExportStage::run(StageContext& c, const fs::path& out_dir, const fs::path&)
   const double cm = read_metric_scale(knowledge_outputs(c.work));
   const knowledge::Knowledge knowledge = knowledge::read_knowledge(knowledge_outputs(c.work).knowledge());
   const FurOutputs f = fur_outputs(c.work);
-  const GroomInput groom = read_groom(f.strands(), f.regions(), groom_roots_file(c.work));
+  const GroomInput groom = read_groom(f.strands(), f.regions(), groom_roots_file(c.work), c.work);
 
   ExportScene scene;
   scene.bald_world = &bald;

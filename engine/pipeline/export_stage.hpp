@@ -53,8 +53,11 @@ io::Skeleton read_export_skeleton(const std::filesystem::path& work, const geome
 ExportOptions preview_options(const std::string& quality, const std::string& formats);
 
 // The groom of a finished fur stage (or of an edit's folder): strands streamed from `strands`
-// (.hair), regions from `regions` (.npz `region`), roots from `roots` (roots.npz). InputError when
-// the counts disagree, naming the files.
-GroomInput read_groom(const std::filesystem::path& strands, const std::filesystem::path& regions, const std::filesystem::path& roots);
+// (.hair), regions from `regions` (.npz `region`), roots from `roots` (roots.npz), and with the fur
+// stage's colours in `work` (fur/colors.npz) each strand takes the colours of the fur stage's strand
+// whose root is nearest its own (itself, for the fur stage's groom; an edit's strands grow on the
+// same body). InputError when the counts disagree, naming the files.
+GroomInput read_groom(const std::filesystem::path& strands, const std::filesystem::path& regions, const std::filesystem::path& roots,
+                      const std::filesystem::path& work);
 
 }  // namespace nf::pipeline

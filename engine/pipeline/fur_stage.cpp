@@ -19,6 +19,7 @@
 #include "engine/fur/fur_model_file.hpp"
 #include "engine/fur/fur_resolution.hpp"
 #include "engine/fur/fur_view_file.hpp"
+#include "engine/fur/strand_colors.hpp"
 #include "engine/fur/ground_truth_inputs.hpp"
 #include "engine/gpu/context.hpp"
 #include "engine/io/ground_truth.hpp"
@@ -30,6 +31,7 @@
 #include "engine/io/view_names.hpp"
 #include "engine/io/view_split.hpp"
 #include "engine/knowledge/knowledge.hpp"
+#include "engine/metrics/color_scores.hpp"
 #include "engine/metrics/groom_scores.hpp"
 #include "engine/pipeline/body_stage.hpp"
 #include "engine/pipeline/checkpoint.hpp"
@@ -44,7 +46,7 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 4;  // 2: fur/roots.npz when the groom has roots of its own; 3: selection, length factors; 4: the selection trades held-out orientation against the envelope
+constexpr int kStageVersion = 5;  // 2: fur/roots.npz when the groom has roots of its own; 3: selection, length factors; 4: the selection trades held-out orientation against the envelope; 5: strand colours
 
 }  // namespace
 
@@ -441,6 +443,7 @@ struct InferredGroom {
   bool own_roots = false;
   std::vector<std::uint32_t> sample_ids;
   std::vector<float> sample_xyz;
+  fur::StrandControls controls;  // with fur.color_controls: every strand's points where its colours are taken
 };
 void infer_groom(StageContext& c, const FurSettings& s, const FurInputs& in, fur::FurTrainer& trainer, const FurOutputs& out,
                  const std::function<void(const char*)>& stop_if_interrupted, InferredGroom& g) {
@@ -453,6 +456,7 @@ void infer_groom(StageContext& c, const FurSettings& s, const FurInputs& in, fur
   // What edit and export need to know where each strand grows, when it is not frames/roots.npz.
   g.own_roots = g.roots != &in.data.roots || in.swapped.has_value();
   if (g.own_roots) fur::write_roots(out.roots(), *g.roots);
+  g.controls.controls = s.color_controls;
   const std::uint32_t n = std::uint32_t(g.roots->size());
   std::vector<std::uint32_t> ids(n);
   for (std::uint32_t i = 0; i < n; ++i) ids[i] = i;
@@ -461,6 +465,7 @@ void infer_groom(StageContext& c, const FurSettings& s, const FurInputs& in, fur
     trainer.field().infer(*g.roots, ids, 65536, [&](std::size_t first, std::uint32_t count, const std::vector<float>& points, const std::vector<float>&) {
       stop_if_interrupted("inference");  // the partial file is removed
       write(std::span<const float>(points));
+      if (g.controls.controls) g.controls.append(std::span<const float>(points).first(std::size_t(count) * fur::kStrandPoints * 3), fur::kStrandPoints);
       for (std::uint32_t k = 0; k < count; ++k)
         if ((first + k) % every == 0) {
           g.sample_ids.push_back(std::uint32_t(first + k));
@@ -473,6 +478,42 @@ void infer_groom(StageContext& c, const FurSettings& s, const FurInputs& in, fur
   regions.values.reserve(n);
   for (std::uint32_t i = 0; i < n; ++i) regions.values.push_back(g.roots->region[i]);
   io::write_npz(out.regions(), {regions});
+}
+
+// Every strand's colours from the photos (fur.color_controls), to colors.npz; on synth scenes whose
+// true strands carry colours, their error against those. Returns metrics.json's "colors".
+json color_groom(StageContext& c, const FurSettings& s, const FurInputs& in, const InferredGroom& g, const FurOutputs& out) {
+  if (!s.color_controls || g.controls.strands == 0) return json{{"controls", 0}};
+  std::vector<std::uint32_t> views;
+  for (const std::vector<fur::FurView>* list : {&in.data.train, &in.data.held_out})
+    for (const fur::FurView& v : *list) views.push_back(v.camera);
+  std::sort(views.begin(), views.end());
+  if (views.empty() || !in.envelope) {
+    log::warn("fur: no photo to take the strands' colours from; the groom has none");
+    return json{{"controls", 0}, {"reason", "no view with a photo and a mask"}};
+  }
+  fur::StrandColorOptions o;
+  o.controls = s.color_controls, o.hidden_depth = s.color_hidden_depth;
+  const fur::StrandColors colors = fur::color_strands(c.gpu, c.scene, views, *in.envelope, g.controls, o);
+  const std::uint64_t n = g.controls.strands;
+  io::NpyWrite rgb{"rgb", {n, s.color_controls, 3}, "<f4", {colors.rgb.begin(), colors.rgb.end()}};
+  io::NpyWrite seen{"seen", {n}, "<i4", {colors.seen.begin(), colors.seen.end()}};
+  io::write_npz(out.colors(), {rgb, seen});
+  json report = colors.report;
+  log::info("fur: strand colours from ", views.size(), " photos in ", report["seconds"].get<double>(), " s; ",
+            100.0 * report["strands_seen"].get<double>(), " % of the strands seen, the rest filled from their neighbours");
+  const auto gt = io::find_ground_truth(c.scene_dir);
+  if (gt && fs::exists(gt->strands())) {
+    const io::StrandSet truth = io::read_hair(gt->strands());
+    if (!truth.colors.empty()) {
+      metrics::GroomColors groom{g.controls.roots, colors.seen, [&](std::uint64_t i, float t) { return colors.at(i, t); }, s.color_controls};
+      report["ground_truth"] = metrics::color_scores(groom, truth, s.metric_strands);
+      const json& e = report["ground_truth"];
+      log::info("fur: strand colours against the truth: Delta E ", e["delta_e_seen"].value("mean", 0.0), " seen, ",
+                e["delta_e_unseen"].value("mean", 0.0), " unseen");
+    }
+  }
+  return report;
 }
 
 // The groom over the held-out views (else the first training views).
@@ -570,6 +611,10 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
   const std::uint32_t n = std::uint32_t(groom.roots->size());
   seconds["inference"] = t.seconds();
   log::info("fur: ", n, " strands inferred and written in ", seconds["inference"].get<double>(), " s");
+  stop_if_interrupted("the colours");
+  t.restart();
+  const json colors = color_groom(c, s, in, groom, out);
+  seconds["colors"] = t.seconds();
 
   // Scores: the groom and the baseline groom (straight, lifted, on the same roots).
   stop_if_interrupted("the scores");
@@ -601,6 +646,7 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
                {"lengths", fur::length_factors_json(trainer->field().length_factors(), in.data.roots, in.cm,
                                                     [](std::int32_t r) { return body::region_name(r); })},
                {"held_out", held_json},
+               {"colors", colors},
                {"groom", groom_scores},
                {"baseline", baseline_scores},
                {"previews", previews},
@@ -664,6 +710,10 @@ const SettingsSchema<FurSettings>& fur_settings() {
         .add("metric_strands", [](F& f) -> auto& { return f.metric_strands; }, 1, 1e7, "strands the metrics compare")
         .add("metric_points", [](F& f) -> auto& { return f.metric_points; }, 2, 1000, "points per strand the metrics compare")
         .add("preview_views", [](F& f) -> auto& { return f.preview_views; }, 0, 100, "previews written")
+        .add("color_controls", [](F& f) -> auto& { return f.color_controls; }, 0, 16,
+             "colours along each strand taken from the photos, the last at the tip (0: no colours)")
+        .add("color_hidden_depth", [](F& f) -> auto& { return f.color_hidden_depth; }, 0, 10,
+             "a strand's point deeper behind M_NeuS than this share of the strand's length takes no colour from a photo (the fur in front hides it)")
         .add("checkpoint_interval", [](F& f) -> auto& { return f.training.checkpoint_interval; }, 0, 1e8,
              "steps between checkpoints (0: none; Ctrl-C always saves one)")
         .add("seed", [](F& f) -> auto& { return f.training.seed; }, 0, 4294967295.0, "random seed (initialisation, roots, views)")

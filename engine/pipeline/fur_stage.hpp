@@ -19,6 +19,7 @@ struct FurOutputs {
   std::filesystem::path previews() const { return dir / "previews"; }       // the groom over held-out photos
   std::filesystem::path roots() const { return dir / "roots.npz"; }         // when the groom's roots are not frames/roots.npz
   std::filesystem::path curve() const { return dir / "curve.jsonl"; }       // with curve_seconds: scores against training time
+  std::filesystem::path colors() const { return dir / "colors.npz"; }       // `rgb` (strands x controls x 3, linear) and `seen` per strand
 };
 inline FurOutputs fur_outputs(const std::filesystem::path& work) { return {work / "fur"}; }
 // The roots file of the groom in fur/strands.hair (one root per strand, same order): fur/roots.npz
@@ -48,6 +49,9 @@ struct FurSettings {
   std::uint32_t metric_strands = 20000;  // the paper compares 100,000 (preset paper); the mm thresholds cost ~N^2
   std::uint32_t score_strands = 0;  // strands rendered to score held-out views (0: the training batch)
   int preview_views = 3;
+  // Colours along each strand from the photos (fur/strand_colors.hpp): how many (0: no colours).
+  std::uint32_t color_controls = 3;
+  double color_hidden_depth = 0.35;  // a control deeper than this share of its strand's length behind M_NeuS is not seen
   // Seconds of training between two points of curve.jsonl (0: none): the groom scored against the
   // held-out views and, on synth scenes, the true strands, while it trains (the bench's curves).
   double curve_seconds = 0;

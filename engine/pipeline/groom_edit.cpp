@@ -72,7 +72,7 @@ json run_edit(gpu::Context& context, const EditOptions& o) {
   const double infer_seconds = t.seconds();
   log::info("edit: ", n, " strands inferred in ", infer_seconds, " s (", before, " before the edits)");
 
-  const GroomInput groom = read_groom(SceneGroom{o.out}.strands(), SceneGroom{o.out}.regions(), SceneGroom{o.out}.roots());
+  const GroomInput groom = read_groom(SceneGroom{o.out}.strands(), SceneGroom{o.out}.regions(), SceneGroom{o.out}.roots(), o.work);
   ExportScene scene;
   scene.bald_world = &bald;
   scene.frame = read_export_frame(export_outputs(o.work));

@@ -59,8 +59,8 @@ json run_pose(const PoseOptions& o) {
 
   const fs::path from = o.groom.empty() ? o.work : o.groom;
   const GroomInput groom = o.groom.empty()
-                               ? read_groom(fur_outputs(o.work).strands(), fur_outputs(o.work).regions(), groom_roots_file(o.work))
-                               : read_groom(SceneGroom{o.groom}.strands(), SceneGroom{o.groom}.regions(), SceneGroom{o.groom}.roots());
+                               ? read_groom(fur_outputs(o.work).strands(), fur_outputs(o.work).regions(), groom_roots_file(o.work), o.work)
+                               : read_groom(SceneGroom{o.groom}.strands(), SceneGroom{o.groom}.regions(), SceneGroom{o.groom}.roots(), o.work);
   const knowledge::Knowledge knowledge = knowledge::read_knowledge(knowledge_outputs(o.work).knowledge());
   ExportScene scene;
   scene.bald_world = &bald;

@@ -12,6 +12,7 @@
 #include "engine/geometry/mesh_tools.hpp"
 #include "engine/geometry/point_index.hpp"
 #include "engine/io/image.hpp"
+#include "engine/core/color.hpp"
 #include "engine/io/mesh.hpp"
 #include "engine/io/scene.hpp"
 #include "engine/io/strand_files.hpp"
@@ -21,11 +22,7 @@
 namespace nf::synth {
 namespace fs = std::filesystem;
 
-namespace {
-float srgb_to_linear(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
-}  // namespace
-
-glm::vec3 linear(glm::vec3 srgb) { return {srgb_to_linear(srgb.r), srgb_to_linear(srgb.g), srgb_to_linear(srgb.b)}; }
+glm::vec3 linear(glm::vec3 srgb) { return color::srgb_to_linear(srgb); }
 
 glm::vec3 palette_color(std::int64_t region) {
   const auto& p = region_palette();

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "engine/core/color.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/parallel.hpp"
 #include "engine/geometry/point_index.hpp"
@@ -17,10 +18,14 @@ namespace {
 
 constexpr unsigned kBodyGeometry = 0, kStrandGeometry = 1;
 
-float srgb_encode(float linear) {
-  const float c = std::clamp(linear, 0.0f, 1.0f);
-  return c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
-}
+float srgb_encode(float linear) { return color::linear_to_srgb(linear); }
+
+}  // namespace
+
+// Roots sit in the coat's shadow; tips catch the light.
+glm::vec3 strand_albedo(glm::vec3 base, float along) { return base * (0.45f + 0.55f * std::sqrt(std::clamp(along, 0.f, 1.f))); }
+
+namespace {
 
 // A per-pixel hash for the jitter of stratified samples (deterministic, no shared RNG state).
 float hash01(std::uint32_t x) {
@@ -66,8 +71,7 @@ struct StrandRenderer::Impl {
     const glm::vec3 t = hair_tangent(hit);
     const float along = (float(k) + hit.hit.u) / float(segments);
     const glm::vec3 base = strand_colors.empty() ? glm::vec3(0.5f) : strand_colors[strand];
-    // Roots sit in the coat's shadow; tips catch the light.
-    const glm::vec3 albedo = base * (0.45f + 0.55f * std::sqrt(along));
+    const glm::vec3 albedo = strand_albedo(base, along);
     glm::vec3 c = 0.25f * albedo;
     const float tv = glm::dot(t, view), sin_v = std::sqrt(std::max(0.0f, 1 - tv * tv));
     for (const Light& l : lights) {

@@ -33,6 +33,10 @@ struct RenderOptions {
   bool true_orientation = false;        // also return Rendered::orientation
 };
 
+// A strand's colour (linear RGB) at `along` in [0, 1] from root to tip, given its root colour: what
+// the renderer shades and the scene's true strands carry (gt/strands.hair's colour array).
+glm::vec3 strand_albedo(glm::vec3 base, float along);
+
 struct StrandLook {
   std::vector<glm::vec3> root_colors;   // linear RGB per strand (empty: grey)
   float radius = 0.001f;                // scene units

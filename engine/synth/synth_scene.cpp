@@ -181,6 +181,14 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
   for (io::Camera& cam : scene.cameras) transform_camera(frame, cam);
   scene.cm_per_unit = kCmPerUnit / frame.scale;
   transform_strands(frame, fur.strands);
+  // The true strands carry their colour per point (linear RGB), what the groom's colours are scored against.
+  fur.strands.colors.resize(3 * fur.strands.point_count());
+  for (std::uint32_t s = 0; s < fur.strands.strand_count(); ++s)
+    for (std::uint32_t k = 0, n = fur.strands.points_in(s); k < n; ++k) {
+      const glm::vec3 c = strand_albedo(fur.root_colors[s], n > 1 ? float(k) / float(n - 1) : 1.f);
+      const std::size_t p = 3 * (std::size_t(fur.strands.offsets[s]) + k);
+      fur.strands.colors[p] = c.r, fur.strands.colors[p + 1] = c.g, fur.strands.colors[p + 2] = c.b;
+    }
   const geometry::Mesh bald_world = to_world(bald);
   io::write_transforms_json(out / "transforms.json", scene);
   io::write_hair(out / "gt" / "strands.hair", fur.strands);

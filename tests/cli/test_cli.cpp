@@ -15,6 +15,7 @@
 #include <string>
 #include <thread>
 
+#include "engine/core/color.hpp"
 #include "engine/core/json.hpp"
 #include "engine/fur/roots.hpp"
 #include "engine/io/file_frame.hpp"
@@ -505,6 +506,29 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   CHECK(five[6]["summary"]["strands"] == 2500);
   const nf::io::StrandSet exported = nf::io::read_hair(work / "export" / "fur.hair");
   CHECK(exported.strand_count() == 2500);
+  {
+    // Colours from the photos on every strand (fur/colors.npz), in every format that holds them,
+    // the same colour in each; scored against the synth scene's true colours.
+    CHECK(fs::exists(work / "fur" / "colors.npz"));
+    REQUIRE(exported.colors.size() == 3 * exported.point_count());
+    CHECK(fur_summary["colors"]["controls"] == 3);
+    CHECK(fur_summary["colors"]["strands_seen"].get<double>() > 0.0);
+    CHECK(fur_summary["colors"]["ground_truth"]["delta_e_seen"]["mean"].get<double>() > 0.0);
+    const nf::io::StrandSet ply = nf::io::read_strands_ply(work / "export" / "fur.ply");
+    const nf::io::StrandSet usd = nf::io::read_strands_usda(work / "export" / "fur.usda");
+    REQUIRE(ply.colors.size() == exported.colors.size());
+    REQUIRE(usd.colors.size() == exported.colors.size());
+    float lo = 1, hi = 0;
+    std::size_t usd_off = 0, ply_off = 0;
+    for (std::size_t i = 0; i < exported.colors.size(); ++i) {
+      usd_off += std::abs(usd.colors[i] - exported.colors[i]) > 1e-5f * std::max(1.f, exported.colors[i]);
+      ply_off += std::abs(nf::color::linear_to_srgb(ply.colors[i]) - nf::color::linear_to_srgb(exported.colors[i])) > 0.51f / 255.f;
+      lo = std::min(lo, exported.colors[i]), hi = std::max(hi, exported.colors[i]);
+    }
+    CHECK(usd_off == 0);
+    CHECK(ply_off == 0);  // 8-bit sRGB: within half a step
+    CHECK(hi > lo);       // not one flat colour
+  }
   CHECK(exported.thickness.size() == exported.point_count());
   {  // Widths: a hair's diameter (mm -> m) at the root, not the fur layer's depth.
     const nf::json k = nf::json::parse(std::ifstream(work / "knowledge" / "knowledge.json"));
@@ -568,6 +592,8 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
       CHECK_MESSAGE(fs::exists(root / "edit_tail" / f), f);
     const nf::io::StrandSet longer = nf::io::read_hair(root / "edit_tail" / "scene_strands.hair");
     REQUIRE(longer.strand_count() == groom.strand_count());
+    // The same roots keep their colours through an edit.
+    CHECK(nf::io::read_hair(root / "edit_tail" / "fur.hair").colors == exported.colors);
     // Regions of the groom: the stage's regions.npz (i4).
     const std::string npz = (work / "fur" / "regions.npz").string();
     const nf::json edit_record = nf::json::parse(std::ifstream(root / "edit_tail" / "edit.json"));
@@ -655,6 +681,7 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
     CHECK(changed > 10);
     CHECK(changed < int(moved.positions.size()) / 2);
     CHECK(nf::io::read_hair(root / "posed" / "fur.hair").strand_count() == 2500);
+    CHECK(nf::io::read_hair(root / "posed" / "fur.hair").colors == exported.colors);  // a pose moves strands, not colours
     CHECK(nf::io::read_skeleton_gltf(root / "posed" / "body.glb").joint_count() == skeleton.joint_count());
     const Result wrong = run("pose --work " + work.string() + " --out " + (root / "posed2").string() + " --set joint.hed=0,40,0");
     CHECK(wrong.code == 2);

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "engine/core/atomic_file.hpp"
+#include "engine/core/color.hpp"
 #include "engine/core/content_hash.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/finite.hpp"
@@ -233,4 +234,23 @@ TEST_CASE("SIGINT sets the interrupt flag instead of ending the process") {
   set_interrupted(false);
   CHECK(Interrupted("x").code() == ExitCode::Interrupted);
   CHECK(int(ExitCode::Interrupted) == 130);
+}
+
+TEST_CASE("colour: the sRGB curve round-trips, Lab has its reference values, Delta E its unit") {
+  for (float v : {0.f, 0.002f, 0.0031308f, 0.04f, 0.2f, 0.5f, 1.f}) CHECK(nf::color::srgb_to_linear(nf::color::linear_to_srgb(v)) == doctest::Approx(v).epsilon(1e-5));
+  CHECK(nf::color::srgb_to_linear(0.5f) == doctest::Approx(0.214041f).epsilon(1e-5));  // the standard's mid grey
+  CHECK(nf::color::linear_to_srgb(2.f) == doctest::Approx(1.f).epsilon(1e-6));  // clamped
+  const glm::vec3 white = nf::color::lab_of_linear(glm::vec3(1.f)), black = nf::color::lab_of_linear(glm::vec3(0.f));
+  CHECK(white.x == doctest::Approx(100.f).epsilon(1e-4));
+  CHECK(std::abs(white.y) < 1e-2f);
+  CHECK(std::abs(white.z) < 1e-2f);
+  CHECK(black.x == doctest::Approx(0.f));
+  // sRGB red (1, 0, 0): L 53.24, a 80.09, b 67.20 (CIE 1976, D65).
+  const glm::vec3 red = nf::color::lab_of_linear({1.f, 0.f, 0.f});
+  CHECK(red.x == doctest::Approx(53.24f).epsilon(2e-3));
+  CHECK(red.y == doctest::Approx(80.09f).epsilon(2e-3));
+  CHECK(red.z == doctest::Approx(67.20f).epsilon(2e-3));
+  CHECK(nf::color::delta_e(glm::vec3(1.f), glm::vec3(0.f)) == doctest::Approx(100.f).epsilon(1e-4));
+  CHECK(nf::color::delta_e(glm::vec3(0.3f, 0.2f, 0.1f), glm::vec3(0.3f, 0.2f, 0.1f)) == 0.f);
+  CHECK(nf::color::luminance(glm::vec3(1.f)) == doctest::Approx(1.f));
 }

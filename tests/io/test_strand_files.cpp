@@ -1,4 +1,5 @@
-// Strand files: every format round-trips (with its optional arrays, empty and single-strand sets),
+// Strand files: every format round-trips (with its optional arrays, colours included where the
+// format holds them, empty and single-strand sets),
 // and malformed files give errors that name the file and the field.
 #include <doctest/doctest.h>
 
@@ -7,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "engine/core/color.hpp"
 #include "engine/core/error.hpp"
 #include "tests/support/files.hpp"
 #include "engine/io/strand_files.hpp"
@@ -55,7 +57,14 @@ TEST_CASE("every strand format round-trips what it can hold") {
     if (e == ".ply" || e == ".usda") {
       CHECK(r.thickness == s.thickness);
       CHECK(r.regions == s.regions);
+      // Colours: PLY's as 8-bit sRGB (half a step off at most), USD's displayColor as written.
+      REQUIRE(r.colors.size() == s.colors.size());
+      for (std::size_t i = 0; i < s.colors.size(); ++i) {
+        if (e == ".usda") CHECK(r.colors[i] == doctest::Approx(s.colors[i]).epsilon(1e-6));
+        else CHECK(std::abs(color::linear_to_srgb(r.colors[i]) - color::linear_to_srgb(s.colors[i])) <= 0.5f / 255.f + 1e-5f);
+      }
     }
+    if (e == ".obj") CHECK(r.colors.empty());  // OBJ lines carry no colour
     fs::remove(path);
   }
 }

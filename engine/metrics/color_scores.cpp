@@ -1,0 +1,77 @@
+#include "engine/metrics/color_scores.hpp"
+
+#include <algorithm>
+
+#include "engine/core/color.hpp"
+#include "engine/core/error.hpp"
+#include "engine/geometry/point_index.hpp"
+
+namespace nf::metrics {
+namespace {
+
+glm::vec3 true_color(const io::StrandSet& truth, std::uint32_t strand, float t) {
+  const std::uint32_t n = truth.points_in(strand);
+  const float x = std::clamp(t, 0.f, 1.f) * float(n - 1);
+  const std::uint32_t k0 = std::min(std::uint32_t(x), n - 1), k1 = std::min(k0 + 1, n - 1);
+  const float f = x - float(k0);
+  const float* a = &truth.colors[3 * (std::size_t(truth.offsets[strand]) + k0)];
+  const float* b = &truth.colors[3 * (std::size_t(truth.offsets[strand]) + k1)];
+  return {a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1]), a[2] + f * (b[2] - a[2])};
+}
+
+json summary(std::vector<double> v) {
+  if (v.empty()) return {{"count", 0}};
+  std::sort(v.begin(), v.end());
+  double sum = 0;
+  for (double x : v) sum += x;
+  return {{"count", v.size()}, {"mean", sum / double(v.size())}, {"median", v[v.size() / 2]}, {"p90", v[std::min(v.size() - 1, v.size() * 9 / 10)]}};
+}
+
+}  // namespace
+
+json color_scores(const GroomColors& g, const io::StrandSet& truth, std::uint32_t max_strands) {
+  if (truth.colors.empty()) throw InputError("the true strands carry no colours (a synth scene older than its colour array)");
+  const std::uint64_t n = g.roots.size() / 3;
+  NF_CHECK(g.seen.size() == n && g.controls > 0, "colour scores: per-strand arrays do not match");
+  std::vector<float> true_roots;
+  true_roots.reserve(3 * std::size_t(truth.strand_count()));
+  for (std::uint32_t s = 0; s < truth.strand_count(); ++s)
+    true_roots.insert(true_roots.end(), &truth.points[3 * std::size_t(truth.offsets[s])], &truth.points[3 * std::size_t(truth.offsets[s])] + 3);
+  const geometry::PointIndex index(true_roots);
+  const std::uint64_t every = std::max<std::uint64_t>(1, n / std::max<std::uint32_t>(1, max_strands));
+  struct Pair {
+    glm::vec3 estimate, truth, local;  // local: the mean of the kLocal nearest true strands' colours
+    bool seen;
+    std::uint32_t control;
+  };
+  constexpr std::size_t kLocal = 8;
+  std::vector<Pair> pairs;
+  for (std::uint64_t s = 0; s < n; s += every) {
+    const std::vector<std::uint32_t> near = index.nearest_k(&g.roots[3 * s], kLocal);
+    for (std::uint32_t c = 1; c <= g.controls; ++c) {
+      const float t = float(c) / float(g.controls);
+      glm::vec3 local(0);
+      for (std::uint32_t k : near) local += true_color(truth, k, t);
+      pairs.push_back({g.at(s, t), true_color(truth, near[0], t), local / float(near.size()), g.seen[s] != 0, c - 1});
+    }
+  }
+  // The exposure: the gain on the estimate's luminance that best fits the truth's (seen strands).
+  double num = 0, den = 0;
+  for (const Pair& p : pairs)
+    if (p.seen) num += double(color::luminance(p.estimate)) * color::luminance(p.truth), den += double(color::luminance(p.estimate)) * color::luminance(p.estimate);
+  const double gain = den > 0 ? num / den : 1.0;
+  std::vector<double> seen, unseen, seen_local;
+  std::vector<double> by_control(g.controls, 0.0), count(g.controls, 0.0);
+  for (const Pair& p : pairs) {
+    const double e = color::delta_e(p.estimate * float(gain), p.truth);
+    (p.seen ? seen : unseen).push_back(e);
+    if (p.seen) by_control[p.control] += e, count[p.control] += 1, seen_local.push_back(color::delta_e(p.estimate * float(gain), p.local));
+  }
+  json along = json::array();  // seen strands' mean at t = 1/C .. 1: how far the colour along a strand is off
+  for (std::uint32_t c = 0; c < g.controls; ++c) along.push_back(count[c] > 0 ? by_control[c] / count[c] : 0.0);
+  return {{"delta_e_seen", summary(seen)}, {"delta_e_unseen", summary(unseen)}, {"delta_e_seen_along", along},
+          {"delta_e_seen_local", summary(seen_local)}, {"exposure_gain", gain},
+          {"strands_scored", (n + every - 1) / every}};
+}
+
+}  // namespace nf::metrics
