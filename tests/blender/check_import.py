@@ -1,7 +1,9 @@
 # Run inside Blender (blender -b --python-exit-code 1 -P check_import.py -- EXPORT_DIR ADDON):
 # Blender's own importers read body.glb (armature with the export's joints; a posed bone moves
 # vertices) and fur.obj (one edge per strand segment), and the add-on builds hair curves attached to
-# the body with the .hair file's curve and point counts. Any failed check raises: exit code 1.
+# the body with the .hair file's curve and point counts, its colours as a `strand_color` attribute and a
+# hair material that reads it; a small Cycles render of the curves shows the groom's colour. Any
+# failed check raises: exit code 1.
 import importlib.util
 import json
 import os
@@ -15,7 +17,7 @@ record = json.load(open(os.path.join(folder, "export.json")))
 spec = importlib.util.spec_from_file_location("nf_gpu_import", addon_path)
 addon = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(addon)
-counts, points, _ = addon.read_hair(os.path.join(folder, "fur.hair"))
+counts, points, _, colors = addon.read_hair(os.path.join(folder, "fur.hair"))
 results = {}
 
 
@@ -96,6 +98,76 @@ before = hair_points()
 turn_head(rig)
 moved = int(np.count_nonzero(np.linalg.norm(hair_points() - before, axis=1) > 1e-5))
 check("hair follows the posed skin", 0 < moved < len(before) // 2, f"rotating 'head' moved {moved} of {len(before)} hair points")
+
+# The colours: the file's, on every point, and a Principled Hair BSDF fed by them.
+attribute = hair.data.attributes.get("strand_color")
+check("colour attribute", attribute is not None and colors is not None and len(attribute.data) == len(colors),
+      f"{'no' if attribute is None else len(attribute.data)} colours on the curves, fur.hair has {'none' if colors is None else len(colors)}")
+if attribute is not None and colors is not None:
+    rgba = np.empty(4 * len(attribute.data), np.float32)
+    attribute.data.foreach_get("color", rgba)
+    off = float(np.abs(rgba.reshape(-1, 4)[:, :3] - colors).max()) if len(colors) else 0.0
+    check("colour values", off < 1e-6, f"largest difference from fur.hair's colours {off:.2e}")
+material = hair.data.materials[0] if len(hair.data.materials) else None
+bsdf = next((n for n in material.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfHairPrincipled"), None) if material else None
+fed = bsdf is not None and bsdf.inputs["Color"].is_linked and bsdf.inputs["Color"].links[0].from_node.bl_idname == "ShaderNodeAttribute" \
+    and bsdf.inputs["Color"].links[0].from_node.attribute_name == "strand_color"
+check("hair material", fed, f"material {material.name if material else None}: Principled Hair BSDF {'fed by the strand_color attribute' if fed else 'missing or not fed'}")
+
+
+def render_curves():
+    """The hair alone (body hidden) in a small Cycles render under a white sky: its mean colour's
+    chromaticity (r, g, b over their sum), weighted by coverage."""
+    scene = bpy.context.scene
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = 16
+    scene.cycles.use_denoising = False  # Debian's Cycles is built without OpenImageDenoise
+    scene.render.resolution_x = scene.render.resolution_y = 96
+    scene.render.film_transparent = True
+    scene.render.image_settings.file_format = "OPEN_EXR"
+    scene.world = bpy.data.worlds.new("white") if scene.world is None else scene.world
+    scene.world.use_nodes = True
+    scene.world.node_tree.nodes["Background"].inputs["Color"].default_value = (1, 1, 1, 1)
+    for o in bpy.data.objects:
+        if o.type == "MESH":
+            o.hide_render = True
+    # Strands a hair wide are a hundredth of a pixel here: widened so the render has pixels to read.
+    radius = hair.data.attributes.get("radius")
+    if radius is not None:
+        r = np.empty(len(radius.data), np.float32)
+        radius.data.foreach_get("value", r)
+        radius.data.foreach_set("value", r * 60)
+    xyz = hair_points()
+    centre, size = xyz.mean(axis=0), float(np.ptp(xyz, axis=0).max())
+    camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
+    scene.collection.objects.link(camera)
+    from mathutils import Vector
+    camera.location = Vector(centre) + Vector((0, -1.6 * size, 0.4 * size))
+    camera.rotation_euler = (Vector(centre) - camera.location).to_track_quat("-Z", "Y").to_euler()
+    scene.camera = camera
+    out = os.path.join(os.path.dirname(folder.rstrip("/")), "blender_render.exr")
+    scene.render.filepath = out
+    bpy.ops.render.render(write_still=True)
+    image = bpy.data.images.load(out)
+    px = np.array(image.pixels[:], np.float64).reshape(-1, 4)
+    covered = px[:, 3] > 0.02
+    rgb = (px[covered, :3] * px[covered, 3:4]).sum(axis=0)
+    return rgb / max(rgb.sum(), 1e-9), int(covered.sum())
+
+
+if colors is not None and len(colors):
+    # The hair's white primary reflection (Principled Hair's R lobe) desaturates the render, so the
+    # check is on the hue: the rendered colour lies off grey in the groom's direction (within 20
+    # degrees in the chromaticity plane) and keeps a share of its saturation.
+    rendered, pixels = render_curves()
+    wanted = colors.mean(axis=0) / max(float(colors.mean(axis=0).sum()), 1e-9)
+    a, b = rendered - 1 / 3, wanted - 1 / 3
+    cosine = float(a @ b / max(np.linalg.norm(a) * np.linalg.norm(b), 1e-12))
+    saturation = float(np.linalg.norm(a) / max(np.linalg.norm(b), 1e-12))
+    check("render shows the colours", pixels > 20 and cosine > np.cos(np.radians(20)) and saturation > 0.15,
+          f"{pixels} hair pixels; chromaticity {np.round(rendered, 3).tolist()} against the groom's {np.round(wanted, 3).tolist()}: "
+          f"hue {np.degrees(np.arccos(min(1.0, cosine))):.1f} degrees off, {100 * saturation:.0f} % of its saturation")
 
 # 4. The add-on installs and enables from Blender's preferences (what a user does once).
 bpy.ops.wm.read_factory_settings(use_empty=True)

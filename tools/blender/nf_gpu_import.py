@@ -1,6 +1,8 @@
 # nf_gpu result -> Blender: the rigged body (body.glb) and the groom (fur.hair) as Blender's native
 # hair curves (the Curves object of Blender 3.3+) attached to the body's surface, so Blender's hair
-# tools can comb, cut and grow it.
+# tools can comb, cut and grow it; the strands' colours from the photos become the curves'
+# `strand_color` attribute, shown by a Principled Hair BSDF (render with Cycles; Cycles 3.4 reads no
+# attribute named `color` on hair curves).
 #
 # As an add-on: Edit > Preferences > Add-ons > Install..., pick this file, enable "nf_gpu groom
 # import"; then File > Import > nf_gpu groom (pick the export folder's export.json).
@@ -29,7 +31,7 @@ import sys
 import bpy
 import numpy as np
 
-HAIR_SEGMENTS, HAIR_POINTS, HAIR_THICKNESS = 1, 2, 4
+HAIR_SEGMENTS, HAIR_POINTS, HAIR_THICKNESS, HAIR_TRANSPARENCY, HAIR_COLORS = 1, 2, 4, 8, 16
 
 # Debian 12 pairs Blender 3.4 with numpy 1.24, which removed `np.bool`; the glTF importer of 3.4
 # still uses it when it guesses flat faces from normals (import_shading="NORMALS", its default),
@@ -40,7 +42,8 @@ if "bool" not in np.__dict__:
 
 
 def read_hair(path):
-    """Cem Yuksel's .hair: (points per strand array, xyz float32 array (N, 3), thickness or None)."""
+    """Cem Yuksel's .hair: (points per strand array, xyz float32 array (N, 3), thickness or None,
+    linear RGB colours (N, 3) or None)."""
     with open(path, "rb") as f:
         header = f.read(128)
         if len(header) < 128 or header[:4] != b"HAIR":
@@ -57,38 +60,42 @@ def read_hair(path):
         points = np.frombuffer(f.read(12 * point_count), dtype="<f4").reshape(-1, 3)
         if len(points) != point_count:
             raise ValueError(f"{path}: truncated points array")
-        thickness = None
+        thickness = colors = None
         if arrays & HAIR_THICKNESS:
             thickness = np.frombuffer(f.read(4 * point_count), dtype="<f4")
-    return counts, points, thickness
+        if arrays & HAIR_TRANSPARENCY:
+            f.read(4 * point_count)
+        if arrays & HAIR_COLORS:
+            colors = np.frombuffer(f.read(12 * point_count), dtype="<f4").reshape(-1, 3)
+            if len(colors) != point_count:
+                raise ValueError(f"{path}: truncated colour array")
+    return counts, points, thickness, colors
 
 
-def select_strands(counts, points, thickness, max_strands, points_per_strand):
-    """An even subset of the strands, each resampled to `points_per_strand` points (0: as they are)."""
+def select_strands(counts, per_point, max_strands, points_per_strand):
+    """An even subset of the strands, each resampled to `points_per_strand` points (0: as they are):
+    (the strands kept, their point counts, and each array of `per_point` (one row per point, or
+    None) for the points kept)."""
     n = len(counts)
     keep = np.arange(n) if not max_strands or max_strands >= n else np.linspace(0, n - 1, max_strands).astype(np.int64)
     if n and np.all(counts == counts[0]):  # nf_gpu's grooms: every strand has the same count, so no loop
         c = int(counts[0])
         pick = np.arange(c) if not points_per_strand or c <= points_per_strand else np.linspace(0, c - 1, points_per_strand).round().astype(np.int64)
-        p = points.reshape(n, c, 3)[keep][:, pick].reshape(-1, 3)
-        t = thickness.reshape(n, c)[keep][:, pick].ravel() if thickness is not None else None
-        return keep, np.full(len(keep), len(pick), dtype=np.int64), p, t
+        picked = [None if a is None else a.reshape((n, c) + a.shape[1:])[keep][:, pick].reshape((-1,) + a.shape[1:]) for a in per_point]
+        return keep, np.full(len(keep), len(pick), dtype=np.int64), picked
     starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    out_counts, out_points, out_thick = [], [], []
+    out_counts, out = [], [[] for _ in per_point]
     for s in keep:
         c = int(counts[s])
-        p = points[starts[s]:starts[s] + c]
-        t = thickness[starts[s]:starts[s] + c] if thickness is not None else None
+        pick = np.arange(c)
         if points_per_strand and c > points_per_strand:
             pick = np.linspace(0, c - 1, points_per_strand).round().astype(np.int64)
-            p = p[pick]
-            t = t[pick] if t is not None else None
-        out_counts.append(len(p))
-        out_points.append(p)
-        if t is not None:
-            out_thick.append(t)
-    return (keep, np.array(out_counts, dtype=np.int64), np.concatenate(out_points) if out_points else np.zeros((0, 3), np.float32),
-            np.concatenate(out_thick) if out_thick else None)
+        out_counts.append(len(pick))
+        for a, o in zip(per_point, out):
+            if a is not None:
+                o.append(a[starts[s]:starts[s] + c][pick])
+    picked = [None if a is None else (np.concatenate(o) if o else a[:0]) for a, o in zip(per_point, out)]
+    return keep, np.array(out_counts, dtype=np.int64), picked
 
 
 def import_body(folder):
@@ -102,8 +109,28 @@ def import_body(folder):
     return body, armature
 
 
-def make_hair_curves(name, counts, points, radii, regions, body):
-    """Blender hair curves (Curves object) with the given strands, attached to `body`'s surface."""
+def hair_material(name):
+    """A hair material that shades each strand with its own colour: Principled Hair BSDF (Cycles)
+    with its colour from the curves' `strand_color` attribute (linear RGB from the photos)."""
+    material = bpy.data.materials.new(name)
+    material.use_nodes = True
+    nodes, links = material.node_tree.nodes, material.node_tree.links
+    nodes.clear()
+    attribute = nodes.new("ShaderNodeAttribute")
+    attribute.attribute_name = "strand_color"
+    hair = nodes.new("ShaderNodeBsdfHairPrincipled")
+    hair.parametrization = "COLOR"
+    hair.inputs["Roughness"].default_value = 0.4
+    output = nodes.new("ShaderNodeOutputMaterial")
+    links.new(attribute.outputs["Color"], hair.inputs["Color"])
+    links.new(hair.outputs[0], output.inputs["Surface"])
+    attribute.location, hair.location, output.location = (-400, 0), (-150, 0), (150, 0)
+    return material
+
+
+def make_hair_curves(name, counts, points, radii, regions, body, colors=None):
+    """Blender hair curves (Curves object) with the given strands, attached to `body`'s surface;
+    with `colors` (linear RGB per point) a `strand_color` attribute and a hair material that shows it."""
     mesh = bpy.data.meshes.new(name)
     mesh.vertices.add(len(points))
     mesh.vertices.foreach_set("co", points.astype(np.float32).ravel())
@@ -131,6 +158,11 @@ def make_hair_curves(name, counts, points, radii, regions, body):
     if regions is not None:
         attribute = hair.data.attributes.new("region", "INT", "CURVE")
         attribute.data.foreach_set("value", regions.astype(np.int32))
+    if colors is not None:
+        attribute = hair.data.attributes.new("strand_color", "FLOAT_COLOR", "POINT")
+        rgba = np.concatenate([colors.astype(np.float32), np.ones((len(colors), 1), np.float32)], axis=1)
+        attribute.data.foreach_set("color", rgba.ravel())
+        hair.data.materials.append(hair_material(name + " colours"))
     # Attach to the body: a UV map on the surface, then Blender's own snapping records each curve's
     # surface coordinate (the roots lie on the skin, so the nearest point is the root's place).
     if not body.data.uv_layers:
@@ -178,16 +210,16 @@ def import_groom(folder, max_strands=0, points_per_strand=0):
     folder = os.path.abspath(folder)
     record = json.load(open(os.path.join(folder, "export.json")))
     body, armature = import_body(folder)
-    counts, points, thickness = read_hair(os.path.join(folder, "fur.hair"))
+    counts, points, thickness, colors = read_hair(os.path.join(folder, "fur.hair"))
     regions = None
     roots_file = os.path.join(folder, "roots.npz")
     if os.path.exists(roots_file):
         regions = np.load(roots_file)["region"]
-    keep, sel_counts, sel_points, sel_thick = select_strands(counts, points, thickness, max_strands, points_per_strand)
+    keep, sel_counts, (sel_points, sel_thick, sel_colors) = select_strands(counts, [points, thickness, colors], max_strands, points_per_strand)
     # glTF's +y up becomes Blender's +z up: the same conversion Blender's glTF importer applies.
     converted = np.stack([sel_points[:, 0], -sel_points[:, 2], sel_points[:, 1]], axis=1) if len(sel_points) else sel_points
     hair = make_hair_curves("nf_gpu_fur", sel_counts, converted, None if sel_thick is None else 0.5 * sel_thick,
-                            None if regions is None else regions[keep], body)
+                            None if regions is None else regions[keep], body, sel_colors)
     surface_uv = hair.data.attributes.get("surface_uv_coordinate")
     uv = np.zeros(2 * len(hair.data.curves), np.float32)
     if surface_uv is not None:
@@ -208,6 +240,8 @@ def import_groom(folder, max_strands=0, points_per_strand=0):
         "armature": armature.name if armature else None,
         "bones": len(armature.data.bones) if armature else 0,
         "strands_exported": record.get("strands"),
+        "colors": sel_colors is not None,
+        "material": hair.data.materials[0].name if len(hair.data.materials) else None,
     }
 
 
