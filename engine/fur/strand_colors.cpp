@@ -12,6 +12,7 @@
 #include "engine/defur/nonbald_masks.hpp"
 #include "engine/geometry/point_index.hpp"
 #include "engine/io/image.hpp"
+#include "engine/io/npz.hpp"
 
 namespace nf::fur {
 namespace {
@@ -99,6 +100,31 @@ glm::vec3 control_color(const float* rgb, std::uint32_t controls, float t) {
   const float* a = rgb + 3 * c0;
   const float* b = rgb + 3 * c1;
   return {a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1]), a[2] + f * (b[2] - a[2])};
+}
+
+void write_strand_colors(const std::filesystem::path& file, const StrandColors& c) {
+  const std::uint64_t n = c.seen.size();
+  NF_CHECK(c.rgb.size() == n * c.controls * 3, "strand colours: arrays of another size than the strands");
+  io::write_npz(file, {io::NpyWrite{"rgb", {n, c.controls, 3}, "<f4", {c.rgb.begin(), c.rgb.end()}},
+                       io::NpyWrite{"seen", {n}, "<i4", {c.seen.begin(), c.seen.end()}}});
+}
+
+StrandColors read_strand_colors(const std::filesystem::path& file, std::uint64_t strands) {
+  const io::NpyArray rgb = io::read_npz_array(file, "rgb");
+  const io::NpyArray seen = io::read_npz_array(file, "seen");
+  if (rgb.shape.size() != 3 || rgb.shape[0] != strands || rgb.shape[1] == 0 || rgb.shape[1] > 64 || rgb.shape[2] != 3)
+    throw InputError(file.string() + ": 'rgb' should be " + std::to_string(strands) + " x controls (1-64) x 3, one row per strand; rerun the fur stage");
+  if (seen.shape.size() != 1 || seen.shape[0] != strands)
+    throw InputError(file.string() + ": 'seen' should hold " + std::to_string(strands) + " values, one per strand; rerun the fur stage");
+  StrandColors c;
+  c.controls = std::uint32_t(rgb.shape[1]);
+  c.rgb.reserve(rgb.values.size());
+  for (double v : rgb.values) {
+    if (!std::isfinite(v) || v < 0 || v > 1e6) throw InputError(file.string() + ": 'rgb' holds " + std::to_string(v) + "; rerun the fur stage");
+    c.rgb.push_back(float(v));
+  }
+  for (double v : seen.values) c.seen.push_back(v != 0 ? 1 : 0);
+  return c;
 }
 
 StrandColors color_strands(gpu::Context& gpu, const io::Scene& scene, const std::vector<std::uint32_t>& views, const geometry::Mesh& envelope,

@@ -18,6 +18,7 @@
 // photos' count and size; the work is controls x views projections on the CPU, and one depth
 // rasterisation of M_NeuS per view on the device.
 #include <cstdint>
+#include <filesystem>
 #include <span>
 #include <vector>
 
@@ -62,6 +63,12 @@ struct StrandColors {
   json report;                     // views used, the share seen, the gains, seconds
   glm::vec3 at(std::uint64_t strand, float t) const { return control_color(&rgb[std::size_t(strand) * controls * 3], controls, t); }
 };
+
+// fur/colors.npz: `rgb` (strands x controls x 3, float32) and `seen` (per strand). The reader
+// checks the shape against `strands` and every value (finite, not negative) and throws InputError
+// naming the file and the array.
+void write_strand_colors(const std::filesystem::path& file, const StrandColors& colors);
+StrandColors read_strand_colors(const std::filesystem::path& file, std::uint64_t strands);
 
 // `views`: the cameras to read (each with a photo and a mask). InputError naming the file when a
 // photo or mask cannot be read or has another size than its camera.

@@ -9,13 +9,13 @@
 namespace nf::metrics {
 namespace {
 
-glm::vec3 true_color(const io::StrandSet& truth, std::uint32_t strand, float t) {
-  const std::uint32_t n = truth.points_in(strand);
+// Linear interpolation at t in [0, 1] between `n` colours spread evenly from root to tip.
+glm::vec3 along(const float* rgb, std::uint32_t n, float t) {
   const float x = std::clamp(t, 0.f, 1.f) * float(n - 1);
   const std::uint32_t k0 = std::min(std::uint32_t(x), n - 1), k1 = std::min(k0 + 1, n - 1);
   const float f = x - float(k0);
-  const float* a = &truth.colors[3 * (std::size_t(truth.offsets[strand]) + k0)];
-  const float* b = &truth.colors[3 * (std::size_t(truth.offsets[strand]) + k1)];
+  const float* a = rgb + 3 * k0;
+  const float* b = rgb + 3 * k1;
   return {a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1]), a[2] + f * (b[2] - a[2])};
 }
 
@@ -29,15 +29,30 @@ json summary(std::vector<double> v) {
 
 }  // namespace
 
-json color_scores(const GroomColors& g, const io::StrandSet& truth, std::uint32_t max_strands) {
+glm::vec3 ColorTruth::at(std::size_t strand, float t) const { return along(&rgb[strand * samples * 3], samples, t); }
+
+ColorTruth color_truth(const io::StrandSet& truth, std::uint32_t samples) {
   if (truth.colors.empty()) throw InputError("the true strands carry no colours (a synth scene older than its colour array)");
+  NF_CHECK(samples >= 2, "colour truth: at least root and tip");
+  ColorTruth c;
+  c.samples = samples;
+  c.roots.reserve(3 * std::size_t(truth.strand_count()));
+  c.rgb.reserve(3 * std::size_t(truth.strand_count()) * samples);
+  for (std::uint32_t s = 0; s < truth.strand_count(); ++s) {
+    const std::size_t first = truth.offsets[s];
+    c.roots.insert(c.roots.end(), &truth.points[3 * first], &truth.points[3 * first] + 3);
+    for (std::uint32_t k = 0; k < samples; ++k) {
+      const glm::vec3 v = along(&truth.colors[3 * first], truth.points_in(s), float(k) / float(samples - 1));
+      c.rgb.insert(c.rgb.end(), {v.r, v.g, v.b});
+    }
+  }
+  return c;
+}
+
+json color_scores(const GroomColors& g, const ColorTruth& truth, std::uint32_t max_strands) {
   const std::uint64_t n = g.roots.size() / 3;
-  NF_CHECK(g.seen.size() == n && g.controls > 0, "colour scores: per-strand arrays do not match");
-  std::vector<float> true_roots;
-  true_roots.reserve(3 * std::size_t(truth.strand_count()));
-  for (std::uint32_t s = 0; s < truth.strand_count(); ++s)
-    true_roots.insert(true_roots.end(), &truth.points[3 * std::size_t(truth.offsets[s])], &truth.points[3 * std::size_t(truth.offsets[s])] + 3);
-  const geometry::PointIndex index(true_roots);
+  NF_CHECK(g.seen.size() == n && g.controls > 0 && truth.strands() > 0, "colour scores: per-strand arrays do not match");
+  const geometry::PointIndex index(truth.roots);
   const std::uint64_t every = std::max<std::uint64_t>(1, n / std::max<std::uint32_t>(1, max_strands));
   struct Pair {
     glm::vec3 estimate, truth, local;  // local: the mean of the kLocal nearest true strands' colours
@@ -51,8 +66,8 @@ json color_scores(const GroomColors& g, const io::StrandSet& truth, std::uint32_
     for (std::uint32_t c = 1; c <= g.controls; ++c) {
       const float t = float(c) / float(g.controls);
       glm::vec3 local(0);
-      for (std::uint32_t k : near) local += true_color(truth, k, t);
-      pairs.push_back({g.at(s, t), true_color(truth, near[0], t), local / float(near.size()), g.seen[s] != 0, c - 1});
+      for (std::uint32_t k : near) local += truth.at(k, t);
+      pairs.push_back({g.at(s, t), truth.at(near[0], t), local / float(near.size()), g.seen[s] != 0, c - 1});
     }
   }
   // The exposure: the gain on the estimate's luminance that best fits the truth's (seen strands).

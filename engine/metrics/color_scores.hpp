@@ -26,9 +26,19 @@ struct GroomColors {
   std::uint32_t controls = 3;                               // the t's compared: 1/C .. 1
 };
 
-// `truth` must carry colours (InputError otherwise); at most `max_strands` strands are scored (an
-// even subset). Returns {delta_e_seen, delta_e_unseen (mean, median, p90), delta_e_seen_along,
+// The true strands' roots and their colours at `samples` evenly spaced places from root to tip
+// (a few MB where the strands file is hundreds). InputError when `truth` carries no colours.
+struct ColorTruth {
+  std::uint32_t samples = 0;
+  std::vector<float> roots;  // strands x 3
+  std::vector<float> rgb;    // strands x samples x 3, linear
+  std::size_t strands() const { return roots.size() / 3; }
+  glm::vec3 at(std::size_t strand, float t) const;
+};
+ColorTruth color_truth(const io::StrandSet& truth, std::uint32_t samples = 11);
+
+// At most `max_strands` strands are scored (an even subset). Returns {delta_e_seen, delta_e_unseen (mean, median, p90), delta_e_seen_along,
 // delta_e_seen_local, exposure_gain, strands_scored}.
-json color_scores(const GroomColors& groom, const io::StrandSet& truth, std::uint32_t max_strands);
+json color_scores(const GroomColors& groom, const ColorTruth& truth, std::uint32_t max_strands);
 
 }  // namespace nf::metrics

@@ -1,13 +1,12 @@
 #include "engine/pipeline/export_stage.hpp"
 
-#include <cmath>
-
 #include "engine/core/error.hpp"
 #include "engine/core/log.hpp"
 #include "engine/core/parallel.hpp"
 #include "engine/export/body_rig.hpp"
 #include "engine/export/region_edits.hpp"
 #include "engine/fur/roots.hpp"
+#include "engine/fur/strand_colors.hpp"
 #include "engine/geometry/point_index.hpp"
 #include "engine/io/json_fields.hpp"
 #include "engine/io/mesh.hpp"
@@ -95,15 +94,9 @@ namespace {
 void attach_fur_colors(GroomInput& g, const fur::Roots& roots, const fs::path& work) {
   const FurOutputs f = fur_outputs(work);
   if (!fs::exists(f.colors())) return;  // a groom without colours (fur.color_controls=0, or an older fur stage)
-  const io::NpyArray rgb = io::read_npz_array(f.colors(), "rgb");
-  const fs::path colored_roots_file = groom_roots_file(work);
-  const fur::Roots colored = fur::read_roots(colored_roots_file);
-  if (rgb.shape.size() != 3 || rgb.shape[0] != colored.size() || rgb.shape[1] == 0 || rgb.shape[1] > 64 || rgb.shape[2] != 3)
-    throw InputError(f.colors().string() + ": 'rgb' should be " + std::to_string(colored.size()) + " x controls x 3 (one row per root of " +
-                     colored_roots_file.string() + "); rerun the fur stage");
-  for (double v : rgb.values)
-    if (!std::isfinite(v) || v < 0) throw InputError(f.colors().string() + ": 'rgb' holds " + std::to_string(v) + "; rerun the fur stage");
-  g.color_controls = std::uint32_t(rgb.shape[1]);
+  const fur::Roots colored = fur::read_roots(groom_roots_file(work));
+  const fur::StrandColors stored = fur::read_strand_colors(f.colors(), colored.size());
+  g.color_controls = stored.controls;
   const std::size_t per = std::size_t(g.color_controls) * 3;
   std::vector<float> positions;
   positions.reserve(3 * colored.size());
@@ -114,7 +107,7 @@ void attach_fur_colors(GroomInput& g, const fur::Roots& roots, const fs::path& w
     for (std::size_t i = begin; i < end; ++i) {
       const float q[3] = {roots.position[i].x, roots.position[i].y, roots.position[i].z};
       const std::size_t from = std::size_t(index.nearest(q).first) * per;
-      for (std::size_t k = 0; k < per; ++k) g.colors[i * per + k] = float(rgb.values[from + k]);
+      std::copy_n(&stored.rgb[from], per, &g.colors[i * per]);
     }
   });
 }

@@ -70,6 +70,7 @@ FurGroundTruth read_fur_ground_truth(const fs::path& scene_dir, const FurSetting
     const io::StrandSet hair = io::read_hair(gt->strands());
     g.sample = metrics::sample_strands(hair, s.metric_strands, s.metric_points, 2);
     g.rendered = metrics::sample_strands(hair, rendered_strands, fur::kStrandPoints, 3);
+    if (!hair.colors.empty()) g.colors = metrics::color_truth(hair);
   }
   if (fs::exists(gt->outer())) g.outer = io::read_mesh(gt->outer());
   g.info = {{"strands", "gt/strands.hair"}, {"outer", "gt/outer.ply"}, {"cm_per_unit", gt->cm_per_unit}};

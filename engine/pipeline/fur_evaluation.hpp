@@ -16,6 +16,7 @@
 #include "engine/fur/ground_truth_inputs.hpp"
 #include "engine/geometry/mesh.hpp"
 #include "engine/io/scene.hpp"
+#include "engine/metrics/color_scores.hpp"
 #include "engine/metrics/groom_scores.hpp"
 
 namespace nf::pipeline {
@@ -45,6 +46,7 @@ io::StrandSet field_strands(fur::FurTrainer& trainer, const fur::Roots& roots, s
 struct FurGroundTruth {
   std::optional<metrics::StrandSample> sample, rendered;
   std::optional<geometry::Mesh> outer;
+  std::optional<metrics::ColorTruth> colors;  // when the true strands carry colours
   json info;  // for metrics.json (null without a ground truth)
   // The truth's own scale: the F-scores' thresholds in mm are scene units through it, so a groom
   // made at a wrong scale is judged at the true one (0: no ground truth; the caller's scale then).

@@ -482,7 +482,8 @@ void infer_groom(StageContext& c, const FurSettings& s, const FurInputs& in, fur
 
 // Every strand's colours from the photos (fur.color_controls), to colors.npz; on synth scenes whose
 // true strands carry colours, their error against those. Returns metrics.json's "colors".
-json color_groom(StageContext& c, const FurSettings& s, const FurInputs& in, const InferredGroom& g, const FurOutputs& out) {
+json color_groom(StageContext& c, const FurSettings& s, const FurInputs& in, const InferredGroom& g, const FurOutputs& out,
+                 const FurGroundTruth& gt) {
   if (!s.color_controls || g.controls.strands == 0) return json{{"controls", 0}};
   std::vector<std::uint32_t> views;
   for (const std::vector<fur::FurView>* list : {&in.data.train, &in.data.held_out})
@@ -495,23 +496,16 @@ json color_groom(StageContext& c, const FurSettings& s, const FurInputs& in, con
   fur::StrandColorOptions o;
   o.controls = s.color_controls, o.hidden_depth = s.color_hidden_depth;
   const fur::StrandColors colors = fur::color_strands(c.gpu, c.scene, views, *in.envelope, g.controls, o);
-  const std::uint64_t n = g.controls.strands;
-  io::NpyWrite rgb{"rgb", {n, s.color_controls, 3}, "<f4", {colors.rgb.begin(), colors.rgb.end()}};
-  io::NpyWrite seen{"seen", {n}, "<i4", {colors.seen.begin(), colors.seen.end()}};
-  io::write_npz(out.colors(), {rgb, seen});
+  fur::write_strand_colors(out.colors(), colors);
   json report = colors.report;
   log::info("fur: strand colours from ", views.size(), " photos in ", report["seconds"].get<double>(), " s; ",
             100.0 * report["strands_seen"].get<double>(), " % of the strands seen, the rest filled from their neighbours");
-  const auto gt = io::find_ground_truth(c.scene_dir);
-  if (gt && fs::exists(gt->strands())) {
-    const io::StrandSet truth = io::read_hair(gt->strands());
-    if (!truth.colors.empty()) {
-      metrics::GroomColors groom{g.controls.roots, colors.seen, [&](std::uint64_t i, float t) { return colors.at(i, t); }, s.color_controls};
-      report["ground_truth"] = metrics::color_scores(groom, truth, s.metric_strands);
-      const json& e = report["ground_truth"];
-      log::info("fur: strand colours against the truth: Delta E ", e["delta_e_seen"].value("mean", 0.0), " seen, ",
-                e["delta_e_unseen"].value("mean", 0.0), " unseen");
-    }
+  if (gt.colors) {
+    const metrics::GroomColors groom{g.controls.roots, colors.seen, [&](std::uint64_t i, float t) { return colors.at(i, t); }, s.color_controls};
+    report["ground_truth"] = metrics::color_scores(groom, *gt.colors, s.metric_strands);
+    const json& e = report["ground_truth"];
+    log::info("fur: strand colours against the truth: Delta E ", e["delta_e_seen"].value("mean", 0.0), " seen, ",
+              e["delta_e_unseen"].value("mean", 0.0), " unseen");
   }
   return report;
 }
@@ -613,7 +607,7 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
   log::info("fur: ", n, " strands inferred and written in ", seconds["inference"].get<double>(), " s");
   stop_if_interrupted("the colours");
   t.restart();
-  const json colors = color_groom(c, s, in, groom, out);
+  const json colors = color_groom(c, s, in, groom, out, gt);
   seconds["colors"] = t.seconds();
 
   // Scores: the groom and the baseline groom (straight, lifted, on the same roots).

@@ -23,7 +23,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-json score(const fur::StrandColors& colors, const fur::StrandControls& controls, const io::StrandSet& truth) {
+json score(const fur::StrandColors& colors, const fur::StrandControls& controls, const metrics::ColorTruth& truth) {
   const metrics::GroomColors groom{controls.roots, colors.seen, [&](std::uint64_t i, float t) { return colors.at(i, t); }, colors.controls};
   return metrics::color_scores(groom, truth, 4000);
 }
@@ -39,14 +39,16 @@ TEST_CASE("strand colours: the true strands coloured from the photos match their
   synth::synthesize_scene(dir / "scene", so);
   io::Scene scene = io::read_scene(dir / "scene");
   const io::GroundTruth gt = *io::find_ground_truth(dir / "scene");
-  const io::StrandSet truth = io::read_hair(gt.strands());
-  REQUIRE(truth.colors.size() == 3 * truth.point_count());  // synth writes the true colours
+  const io::StrandSet true_strands = io::read_hair(gt.strands());
+  REQUIRE(true_strands.colors.size() == 3 * true_strands.point_count());  // synth writes the true colours
+  const metrics::ColorTruth truth = metrics::color_truth(true_strands);
+  CHECK(truth.at(0, 1.f).r == doctest::Approx(true_strands.colors[3 * (true_strands.offsets[1] - 1)]));  // the tip's own colour
   const geometry::Mesh envelope = io::read_mesh(gt.outer());
 
   fur::StrandControls controls;
   controls.controls = 3;
-  controls.append(truth.points, truth.points_in(0));
-  REQUIRE(controls.strands == truth.strand_count());
+  controls.append(true_strands.points, true_strands.points_in(0));
+  REQUIRE(controls.strands == true_strands.strand_count());
   std::vector<std::uint32_t> views(scene.cameras.size());
   for (std::uint32_t v = 0; v < views.size(); ++v) views[v] = v;
   fur::StrandColorOptions o;

@@ -46,6 +46,9 @@ def structured():
         + array("<f4", "<f4", [n, 3], vec([0, 0, 1])) + array("<f4", "<f4", [n, 3], vec([0, 1, 0]))
         + array("<f4", "<f4", [n, 3], vec([0, 0, 1])) + array("<i4", "<i4", [n], [0, 1, 2, 3])
         + array("<f4", "<f4", [n], [0.01, 0.02, 0.0, 0.5]))
+    # colors.npz: 4 strands of 3 colours, the first not seen.
+    put("strand_colors", "four.bin", struct.pack("<B", 4) + array("<f4", "<f4", [n, 3, 3], [0.05 * i for i in range(9 * n)])
+        + array("<i4", "<i4", [n], [0, 1, 1, 1]))
     # vertex_fur.npz / frames.npz for 4 vertices (faces).
     put("vertex_fur", "four.bin", struct.pack("<H", n) + array("<i4", "<i4", [n], [0, 1, 2, 3])
         + array("<f4", "<f4", [n], [0.01, 0.02, 0.0, 0.5]) + array("<f4", "<f4", [n, 3], vec([0, 0, 1]))
