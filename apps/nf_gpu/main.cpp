@@ -234,6 +234,7 @@ void print_export_guide(const std::filesystem::path& dir) {
                 dir.string().c_str());
   }
   if (std::filesystem::exists(dir / "turntable.png")) std::printf("  previews: %s/turntable.png\n", dir.string().c_str());
+  if (std::filesystem::exists(dir / "index.html")) std::printf("  open in a browser: %s\n", (std::filesystem::absolute(dir) / "index.html").string().c_str());
 }
 
 int run_reconstruct(const nf::pipeline::ReconstructOptions& options, bool as_json, bool profile,

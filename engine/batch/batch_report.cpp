@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "engine/core/host.hpp"
+#include "engine/core/text.hpp"
 #include "engine/pipeline/export_stage.hpp"
 #include "engine/pipeline/pipeline.hpp"
 #include "engine/pipeline/stage_record.hpp"
@@ -62,18 +63,6 @@ std::string score_text(const json& scores) {
 std::string seconds_text(const SceneRow& r) {
   std::string out;
   for (const auto& [stage, s] : r.stage_seconds) out += (out.empty() ? "" : " ") + stage + " " + fixed(s, 0);
-  return out;
-}
-
-std::string html_escape(const std::string& text) {
-  std::string out;
-  for (char ch : text) {
-    if (ch == '<') out += "&lt;";
-    else if (ch == '>') out += "&gt;";
-    else if (ch == '&') out += "&amp;";
-    else if (ch == '"') out += "&quot;";
-    else out += ch;
-  }
   return out;
 }
 

@@ -23,6 +23,9 @@ std::string to_lower(std::string text);
 // what JSON files and records can hold.
 bool is_utf8(std::string_view text);
 
+// Text safe inside HTML elements and quoted attributes (< > & " escaped).
+std::string html_escape(std::string_view text);
+
 // At most `max_bytes` of `text` (cut at a UTF-8 character boundary, "..." appended when cut), with
 // control characters as spaces: for quoting untrusted text in a message.
 std::string shorten(std::string_view text, std::size_t max_bytes);

@@ -11,6 +11,7 @@
 #include "engine/core/stopwatch.hpp"
 #include "engine/fur/fur_views.hpp"
 #include "engine/fur/strand_colors.hpp"
+#include "engine/pipeline/export_page.hpp"
 #include "engine/geometry/mesh_tools.hpp"
 #include "engine/io/image.hpp"
 #include "engine/io/mesh.hpp"
@@ -227,6 +228,7 @@ json write_export(OutputFolder& folder, const GroomInput& g, const ExportScene& 
     const synth::StrandRenderer renderer(posed_export, body_look, subset, look, render_options);
     if (o.turntable_frames > 0) {
       std::vector<io::Image> frames;
+      json frame_files = json::array();
       const std::uint32_t half = rig.views / 2;
       for (std::uint32_t k = 0; k < std::uint32_t(o.turntable_frames); ++k) {
         const io::Camera& cam = ring[k % 2 ? half + k / 2 : k / 2];
@@ -234,10 +236,11 @@ json write_export(OutputFolder& folder, const GroomInput& g, const ExportScene& 
         char name[32];
         std::snprintf(name, sizeof name, "turntable_%03u.png", k);
         io::write_png(folder.claim(name), frames.back());
+        frame_files.push_back(name);
       }
       for (io::Image& f : frames) f = io::downscale_to(f, std::uint32_t(o.preview_size / 2));
       io::write_png(folder.claim("turntable.png"), contact_sheet(frames, 4));
-      previews["turntable"] = {{"frames", frames.size()}, {"sheet", "turntable.png"}};
+      previews["turntable"] = {{"frames", frames.size()}, {"sheet", "turntable.png"}, {"files", frame_files}};
     }
     if (o.compare_views > 0 && !posed && sc.scene) {
       json compared = json::array();
@@ -265,6 +268,17 @@ json write_export(OutputFolder& folder, const GroomInput& g, const ExportScene& 
               {"posed", posed},
               {"previews", previews},
               {"seconds", seconds}};
+  ExportPage page;
+  page.title = sc.title;
+  page.figures = sc.figures;
+  page.figures.insert(page.figures.begin(), {"strands", std::to_string(n) + (g.color_controls ? ", coloured from the photos" : "")});
+  page.files = files;
+  if (previews.contains("turntable"))
+    for (const json& f : previews["turntable"]["files"]) page.turntable.push_back(f.get<std::string>());
+  if (previews.contains("compare"))
+    for (const json& f : previews["compare"]) page.compare.push_back(f.get<std::string>());
+  write_file_atomic(folder.claim("index.html"), export_page_html(page));
+  record["page"] = "index.html";
   record["seconds_total"] = t_all.seconds();
   write_file_atomic(folder.claim("export.json"), record.dump(2) + "\n");
   return record;

@@ -56,10 +56,13 @@ struct ExportScene {
   std::vector<std::uint32_t> compare_cameras;
   // Posing (nf_gpu pose): the body's skinning transforms (export frame); empty: the bind pose.
   std::vector<glm::mat4> skinning;
+  // index.html (export_page.hpp): its title and the figures the caller measured, in order.
+  std::string title = "nf_gpu groom";
+  std::vector<std::pair<std::string, std::string>> figures;
 };
 
 // Writes the files into `folder` and returns what export.json records (also written there):
-// files, counts, the frame, seconds. InputError when an input is malformed (names the file).
+// files, counts, the frame, seconds; and index.html, the page that shows them. InputError when an input is malformed (names the file).
 json write_export(OutputFolder& folder, const GroomInput& groom, const ExportScene& scene, const ExportOptions& options);
 
 // The groom as exported (export frame, metres; posed when scene.skinning is set), streamed: what

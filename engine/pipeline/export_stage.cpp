@@ -23,7 +23,7 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 2;  // 2: the strands' colours
+constexpr int kStageVersion = 3;  // 2: the strands' colours; 3: index.html
 
 ExportOptions export_preset(const std::string& quality) {
   ExportOptions o;
@@ -112,6 +112,37 @@ void attach_fur_colors(GroomInput& g, const fur::Roots& roots, const fs::path& w
   });
 }
 
+// What index.html shows of the fur stage's metrics.json (on synth scenes, against the truth too).
+std::vector<std::pair<std::string, std::string>> page_figures(const json& m) {
+  std::vector<std::pair<std::string, std::string>> out;
+  const auto fixed = [](double v, int digits) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.*f", digits, v);
+    return std::string(text);
+  };
+  if (m.contains("selection") && m["selection"].contains("kept"))
+    out.push_back({"groom kept", m["selection"]["kept"].get<std::string>() + " (of " + std::to_string(m.value("steps", 0)) + " steps)"});
+  if (m.contains("held_out") && m["held_out"].contains("silhouette_iou"))
+    out.push_back({"held-out photos: silhouette IoU, orientation error",
+                   fixed(m["held_out"]["silhouette_iou"].get<double>(), 3) + ", " + fixed(m["held_out"].value("orientation_error_deg", 0.0), 1) + " degrees"});
+  if (m.contains("groom") && m["groom"].contains("fscore")) {
+    const json& g = m["groom"]["fscore"];
+    const json& b = m.contains("baseline") && m["baseline"].contains("fscore") ? m["baseline"]["fscore"] : json::object();
+    out.push_back({"against the true strands: F(2 cm, 20 deg) / F(2 mm, 20 deg)",
+                   fixed(g.value("2cm_20deg", 0.0), 1) + " / " + fixed(g.value("2mm_20deg", 0.0), 1) + " (straight strands: " +
+                       fixed(b.value("2cm_20deg", 0.0), 1) + " / " + fixed(b.value("2mm_20deg", 0.0), 1) + ")"});
+  }
+  if (m.contains("colors") && m["colors"].contains("strands_seen"))
+    out.push_back({"strands a photo showed (the others take their neighbours' colours)", fixed(100.0 * m["colors"]["strands_seen"].get<double>(), 0) + " %"});
+  if (m.contains("colors") && m["colors"].contains("ground_truth")) {
+    const json& e = m["colors"]["ground_truth"];
+    out.push_back({"colours against the true ones: Delta E seen / filled",
+                   fixed(e["delta_e_seen"].value("mean", 0.0), 1) + " / " + fixed(e["delta_e_unseen"].value("mean", 0.0), 1)});
+  }
+  if (m.contains("seconds_total")) out.push_back({"fur stage", fixed(m["seconds_total"].get<double>(), 0) + " s"});
+  return out;
+}
+
 }  // namespace
 
 GroomInput read_groom(const fs::path& strands, const fs::path& regions, const fs::path& roots_file, const fs::path& work) {
@@ -174,6 +205,8 @@ json ExportStage::run(StageContext& c, const fs::path& out_dir, const fs::path&)
   for (std::uint32_t v = 0; v < c.scene.cameras.size(); ++v)
     if (io::is_held_out(v, every)) scene.compare_cameras.push_back(v);
   if (scene.compare_cameras.empty() && !c.scene.cameras.empty()) scene.compare_cameras.push_back(0);
+  scene.title = "nf_gpu groom: " + fs::absolute(c.scene_dir).lexically_normal().filename().string();
+  scene.figures = page_figures(io::read_json_file(f.metrics()));
   OutputFolder folder(out_dir, "export");
   json record = write_export(folder, groom, scene, o);
   log::info("export: ", groom.strands.strands, " strands and the rigged body (", skeleton.joint_count(), " joints)");

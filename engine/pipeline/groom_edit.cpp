@@ -79,6 +79,7 @@ json run_edit(gpu::Context& context, const EditOptions& o) {
   const io::Skeleton skeleton = read_export_skeleton(o.work, bald);
   scene.skeleton = &skeleton;
   scene.hair_diameter_mm = exporter::region_hair_diameter_mm(knowledge, edits);
+  scene.title = "nf_gpu groom, edited";
   const json exported = write_export(folder, groom, scene, export_options);
   json diameters = json::object();
   for (int r = 0; r < body::kRegionCount; ++r) diameters[std::string(body::kRegionNames[std::size_t(r)])] = scene.hair_diameter_mm[std::size_t(r)];

@@ -77,6 +77,7 @@ json run_pose(const PoseOptions& o) {
     }
   }
   scene.skinning = exporter::skinning_transforms(skeleton, rotations);
+  scene.title = "nf_gpu groom, posed";
   OutputFolder folder(o.out, "pose");
   const json exported = write_export(folder, groom, scene, export_options);
   json record{{"work", fs::absolute(o.work).string()}, {"groom", fs::absolute(from).string()}, {"joints", asked},

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -528,6 +529,18 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
     CHECK(usd_off == 0);
     CHECK(ply_off == 0);  // 8-bit sRGB: within half a step
     CHECK(hi > lo);       // not one flat colour
+    // index.html: every image and file it links is in the folder, with the figures measured.
+    const std::string page = slurp(work / "export" / "index.html");
+    std::size_t links = 0;
+    for (const char* attribute : {"src=\"", "href=\""})
+      for (std::size_t at = page.find(attribute); at != std::string::npos; at = page.find(attribute, at + 1)) {
+        const std::size_t from = at + std::strlen(attribute), to = page.find('"', from);
+        CHECK_MESSAGE(fs::exists(work / "export" / page.substr(from, to - from)), page.substr(from, to - from));
+        ++links;
+      }
+    CHECK(links >= 6);
+    CHECK(page.find("against the true strands") != std::string::npos);
+    CHECK(page.find("colours against the true ones") != std::string::npos);
   }
   CHECK(exported.thickness.size() == exported.point_count());
   {  // Widths: a hair's diameter (mm -> m) at the root, not the fur layer's depth.
@@ -658,6 +671,8 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
     INFO(shave.output);
     REQUIRE(shave.code == 0);
     CHECK(shave.output.find("blender -b -P tools/blender/nf_gpu_import.py") != std::string::npos);
+    CHECK(shave.output.find("open in a browser: ") != std::string::npos);
+    CHECK(fs::exists(root / "edit_shave" / "index.html"));
     const nf::io::StrandSet shaved = nf::io::read_strands_ply(root / "edit_shave" / "fur.ply");
     int shaved_body = 0, groom_body = 0;
     for (std::uint16_t region : shaved.regions) {
