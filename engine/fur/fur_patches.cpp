@@ -56,8 +56,8 @@ void FurPatches::account(Stored& s, const void* texels, std::uint32_t y) {
     if (f & NativeTargets::kOriented) {
       s.reliability += row[x].reliability / 255.0, s.oriented += 1;
       const std::size_t scale = f >> kScaleShift;
-      if (scale_count_.size() <= scale) scale_count_.resize(scale + 1, 0);
-      ++scale_count_[scale];
+      if (s.scale_count.size() <= scale) s.scale_count.resize(scale + 1, 0);
+      ++s.scale_count[scale];
     }
   }
 }
@@ -68,6 +68,9 @@ std::uint32_t FurPatches::finish(Stored&& s) {
   std::uint64_t total = 0;
   for (std::uint64_t& k : s.tile_fur) k = total += k;
   bytes_ += std::uint64_t(s.crop.width) * s.crop.height * sizeof(Texel);
+  // (The store's scale counts take a view's only once it is stored: a view that failed halfway adds none.)
+  if (scale_count_.size() < s.scale_count.size()) scale_count_.resize(s.scale_count.size(), 0);
+  for (std::size_t k = 0; k < s.scale_count.size(); ++k) scale_count_[k] += s.scale_count[k];
   views_.push_back(std::move(s));
   std::uint64_t all = 0;
   for (std::uint64_t c : scale_count_) all += c;

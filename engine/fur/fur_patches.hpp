@@ -75,10 +75,11 @@ class FurPatches {
     double reliability = 0, oriented = 0;
     std::uint32_t tiles_x = 0, tiles_y = 0;
     std::vector<std::uint64_t> tile_fur;  // cumulative fur pixels over the tiles (row-major)
+    std::vector<std::uint64_t> scale_count;  // oriented pixels per Gabor scale
   };
   std::filesystem::path file_of(std::uint32_t camera) const;
   Stored start(std::uint32_t camera, const io::Camera& crop) const;
-  void account(Stored& s, const void* texels, std::uint32_t y);  // one stored row's fur, reliability and scales
+  static void account(Stored& s, const void* texels, std::uint32_t y);  // one stored row's fur, reliability and scales
   std::uint32_t finish(Stored&& s);
   gpu::Context& gpu_;
   const geometry::Mesh& bald_;

@@ -1,5 +1,6 @@
 #include "engine/fur/fur_view_file.hpp"
 
+#include <cmath>
 #include <cstring>
 
 #include "engine/core/atomic_file.hpp"
@@ -92,6 +93,13 @@ std::optional<StoredFurView> read_fur_view(const std::filesystem::path& file, co
     v.rgb = get_floats(in, 3 * n, "rgb");
     if (in.value<std::uint8_t>("native flag")) s.native_crop = get_crop(in, camera);
     if (in.remaining() != 0) throw InputError(std::to_string(in.remaining()) + " bytes after the end");
+    // Values a view has: finite intrinsics and scale, a crop of some pixels, a reliability in [0, 1].
+    const auto sane = [](const io::Camera& c) {
+      return c.width > 0 && c.height > 0 && std::isfinite(c.fx) && std::isfinite(c.fy) && std::isfinite(c.cx) && std::isfinite(c.cy) && c.fx > 0 && c.fy > 0;
+    };
+    if (!sane(v.crop) || (s.native_crop && !sane(*s.native_crop)) || !(v.scale > 0 && v.scale <= 1) ||
+        !(v.orientation_reliability >= 0 && v.orientation_reliability <= 1))
+      throw InputError("a crop, scale or reliability no view has");
     // A crop is a part of the photo: one larger than the photo is of another scene.
     const auto inside = [&](const io::Camera& c, double scale) { return c.width <= std::lround(camera.width * scale) + 1 && c.height <= std::lround(camera.height * scale) + 1; };
     if (!inside(v.crop, v.scale) || (s.native_crop && !inside(*s.native_crop, 1.0)))

@@ -1,6 +1,7 @@
 #include "engine/fur/strand_colors.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <mutex>
 
@@ -64,7 +65,7 @@ bool observe(const ViewData& v, const float* p, float length, double hidden_dept
   const io::Image& img = v.photo;
   const std::uint32_t ch = img.channels;
   for (int k = 0; k < 3; ++k) {
-    const std::uint32_t c3 = std::min<std::uint32_t>(std::uint32_t(k), ch - 1);
+    const std::uint32_t c3 = ch >= 3 ? std::uint32_t(k) : 0;  // grey (+ alpha): the grey for every channel
     const float a = img.at(x0, y0, c3), b = img.at(x0 + 1, y0, c3), d = img.at(x0, y0 + 1, c3), e = img.at(x0 + 1, y0 + 1, c3);
     out[k] = (1 - fy) * ((1 - fx) * a + fx * b) + fy * ((1 - fx) * d + fx * e);
   }
@@ -162,7 +163,8 @@ StrandColors color_strands(gpu::Context& gpu, const io::Scene& scene, const std:
         // Each control is written by the one thread that owns its strand.
         each_seen([&](std::size_t i, glm::vec3 colour) { first[i] += colour, first_count[i] += 1; });
       } else {
-        double log_sum = 0, count = 0;
+        // Each chunk's sums, added in the chunks' order: the same gain (and colours.npz) every run.
+        std::vector<std::array<double, 3>> chunks;  // begin, sum, count
         parallel_for(in.strands, [&](std::size_t begin, std::size_t end) {
           double local_sum = 0, local_count = 0;
           glm::vec3 colour;
@@ -173,8 +175,11 @@ StrandColors color_strands(gpu::Context& gpu, const io::Scene& scene, const std:
             local_sum += std::clamp(std::log(double(expected) / seen), -1.0, 1.0), local_count += 1;  // a highlight is not an exposure
           }
           const std::lock_guard<std::mutex> lock(merge);
-          log_sum += local_sum, count += local_count;
+          chunks.push_back({double(begin), local_sum, local_count});
         });
+        std::sort(chunks.begin(), chunks.end());
+        double log_sum = 0, count = 0;
+        for (const auto& [begin, sum, n_seen] : chunks) log_sum += sum, count += n_seen;
         const double gain = count > 0 ? std::exp(log_sum / count) : 1.0;
         gains.push_back(gain);
         each_seen([&](std::size_t i, glm::vec3 colour) {

@@ -15,8 +15,9 @@
 // (by root); a control that no view sees takes its strand's nearest seen control.
 //
 // Photos are read one at a time, so memory is the groom's controls and one photo, whatever the
-// photos' count and size; the work is controls x views projections on the CPU, and one depth
-// rasterisation of M_NeuS per view on the device.
+// photos' count and size; the work is controls x views projections on the CPU, and a depth
+// rasterisation of M_NeuS per view and pass on the device (kept for neither pass: a 50 MP depth map
+// a view would not fit).
 #include <cstdint>
 #include <filesystem>
 #include <span>

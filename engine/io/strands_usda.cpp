@@ -214,7 +214,9 @@ StrandSet read_strands_usda(const std::filesystem::path& path) {
   }
   s.points.assign(points.begin(), points.end());
   s.thickness.assign(widths.begin(), widths.end());
-  s.colors.assign(colors.begin(), colors.end());
+  // Per-vertex colours only (what nf_gpu writes); a constant or per-curve displayColor from another
+  // tool is left out rather than refused.
+  if (colors.size() == points.size()) s.colors.assign(colors.begin(), colors.end());
   for (double r : regions) {
     if (!(r >= 0 && r <= 65535) || r != std::floor(r)) throw InputError(where + ": primvars:region holds " + std::to_string(r));
     s.regions.push_back(std::uint16_t(r));

@@ -53,7 +53,7 @@ json color_scores(const GroomColors& g, const ColorTruth& truth, std::uint32_t m
   const std::uint64_t n = g.roots.size() / 3;
   NF_CHECK(g.seen.size() == n && g.controls > 0 && truth.strands() > 0, "colour scores: per-strand arrays do not match");
   const geometry::PointIndex index(truth.roots);
-  const std::uint64_t every = std::max<std::uint64_t>(1, n / std::max<std::uint32_t>(1, max_strands));
+  const std::uint64_t cap = std::max<std::uint32_t>(1, max_strands), every = std::max<std::uint64_t>(1, (n + cap - 1) / cap);
   struct Pair {
     glm::vec3 estimate, truth, local;  // local: the mean of the kLocal nearest true strands' colours
     bool seen;

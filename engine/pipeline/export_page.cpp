@@ -42,7 +42,7 @@ std::string export_page_html(const ExportPage& p) {
     s << "</div>\n";
   }
   if (!p.compare.empty()) {
-    s << "<h2>Beside the photos it was not trained on</h2>\n<div class=\"compare\">\n";
+    s << "<h2>Beside photos the fur was not trained on (its colours come from every photo)</h2>\n<div class=\"compare\">\n";
     for (const std::string& f : p.compare) s << "<img src=\"" << html_escape(f) << "\" alt=\"" << html_escape(f) << "\">\n";
     s << "</div>\n";
   }

@@ -136,8 +136,8 @@ std::vector<std::pair<std::string, std::string>> page_figures(const json& m) {
     out.push_back({"strands a photo showed (the others take their neighbours' colours)", fixed(100.0 * m["colors"]["strands_seen"].get<double>(), 0) + " %"});
   if (m.contains("colors") && m["colors"].contains("ground_truth")) {
     const json& e = m["colors"]["ground_truth"];
-    out.push_back({"colours against the true ones: Delta E seen / filled",
-                   fixed(e["delta_e_seen"].value("mean", 0.0), 1) + " / " + fixed(e["delta_e_unseen"].value("mean", 0.0), 1)});
+    const auto mean = [&](const json& summary) { return summary.value("count", 0) > 0 ? fixed(summary["mean"].get<double>(), 1) : std::string("n/a"); };
+    out.push_back({"colours against the true ones: Delta E seen / filled", mean(e["delta_e_seen"]) + " / " + mean(e["delta_e_unseen"])});
   }
   if (m.contains("seconds_total")) out.push_back({"fur stage", fixed(m["seconds_total"].get<double>(), 0) + " s"});
   return out;
@@ -205,7 +205,9 @@ json ExportStage::run(StageContext& c, const fs::path& out_dir, const fs::path&)
   for (std::uint32_t v = 0; v < c.scene.cameras.size(); ++v)
     if (io::is_held_out(v, every)) scene.compare_cameras.push_back(v);
   if (scene.compare_cameras.empty() && !c.scene.cameras.empty()) scene.compare_cameras.push_back(0);
-  scene.title = "nf_gpu groom: " + fs::absolute(c.scene_dir).lexically_normal().filename().string();
+  fs::path scene_name = fs::absolute(c.scene_dir).lexically_normal();
+  if (scene_name.filename().empty()) scene_name = scene_name.parent_path();  // `--scene cat/`
+  scene.title = "nf_gpu groom: " + scene_name.filename().string();
   scene.figures = page_figures(io::read_json_file(f.metrics()));
   OutputFolder folder(out_dir, "export");
   json record = write_export(folder, groom, scene, o);

@@ -258,7 +258,8 @@ json make_views(StageContext& c, const FurSettings& s, FurInputs& in, const fs::
     in.patches = std::make_unique<fur::FurPatches>(c.gpu, in.bald, scratch / "patches", s.patch, fur::FurPatches::Files::kept);
     in.data.patches = in.patches.get();
   }
-  // Held-out views' native targets go to a store of their own, which only their fixed patches outlive.
+  // Held-out views' native targets go to a store of their own: only their fixed patches are cut from
+  // it (its files stay for a resumed run, like the training views').
   std::unique_ptr<fur::FurPatches> held_store;
   if (s.patch) held_store = std::make_unique<fur::FurPatches>(c.gpu, in.bald, scratch / "held_out_patches", s.patch, fur::FurPatches::Files::kept);
   const fs::path kept = scratch / "views";
@@ -504,8 +505,8 @@ json color_groom(StageContext& c, const FurSettings& s, const FurInputs& in, con
     const metrics::GroomColors groom{g.controls.roots, colors.seen, [&](std::uint64_t i, float t) { return colors.at(i, t); }, s.color_controls};
     report["ground_truth"] = metrics::color_scores(groom, *gt.colors, s.metric_strands);
     const json& e = report["ground_truth"];
-    log::info("fur: strand colours against the truth: Delta E ", e["delta_e_seen"].value("mean", 0.0), " seen, ",
-              e["delta_e_unseen"].value("mean", 0.0), " unseen");
+    const auto mean = [](const json& summary) { return summary.value("count", 0) > 0 ? std::to_string(summary["mean"].get<double>()) : std::string("n/a"); };
+    log::info("fur: strand colours against the truth: Delta E ", mean(e["delta_e_seen"]), " seen, ", mean(e["delta_e_unseen"]), " unseen");
   }
   return report;
 }

@@ -95,6 +95,14 @@ TEST_CASE("fur views: the true orientation replaces the Gabor map, at native res
   fur::write_fur_view(dir / "no_native.nfview", view, nullptr);
   CHECK_FALSE(fur::read_fur_view(dir / "no_native.nfview", scene)->native_crop);
   CHECK_FALSE(fur::read_fur_view(dir / "missing.nfview", scene));
+  fur::FurView odd = view;  // whole, but with values no view has
+  odd.scale = 0;
+  fur::write_fur_view(dir / "odd.nfview", odd, &native.crop);
+  CHECK_FALSE(fur::read_fur_view(dir / "odd.nfview", scene));
+  io::Camera empty_crop = native.crop;
+  empty_crop.width = 0;
+  fur::write_fur_view(dir / "odd.nfview", view, &empty_crop);
+  CHECK_FALSE(fur::read_fur_view(dir / "odd.nfview", scene));
   io::Scene renamed = scene;
   renamed.cameras[0].name = "another";
   CHECK_FALSE(fur::read_fur_view(kept, renamed));

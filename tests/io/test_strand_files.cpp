@@ -69,6 +69,21 @@ TEST_CASE("every strand format round-trips what it can hold") {
   }
 }
 
+TEST_CASE("a USD groom's constant displayColor (another tool's) is left out, not refused") {
+  const fs::path path = temp("strands_constant_color.usda");
+  write_strands(path, sample());
+  std::string text = slurp(path);
+  const std::size_t at = text.find("color3f[] primvars:displayColor = [");
+  REQUIRE(at != std::string::npos);
+  const std::size_t end = text.find(']', at);
+  text.replace(at, end - at + 1, "color3f[] primvars:displayColor = [(0.5, 0.4, 0.3)]");
+  spit(path, text);
+  const StrandSet r = read_strands(path);
+  CHECK(r.points == sample().points);
+  CHECK(r.colors.empty());
+  fs::remove(path);
+}
+
 TEST_CASE("empty sets, a single point and engine-layout strands round-trip") {
   StrandSet empty;
   StrandSet single;
