@@ -143,28 +143,23 @@ void write_strands_usda(const std::filesystem::path& path, const StrandStream& s
     if (written != s.points) throw InternalError(path.string() + ": " + std::to_string(written) + " points streamed, " + std::to_string(s.points) + " announced");
     out << "]\n";
     put_extent(out, lo, hi);
-    if (s.width) {
-      out << "        float[] widths = [";
+    // A per-point attribute: `[a, b, ...]` over every strand's points, each written by put(strand, k).
+    const auto put_per_point = [&](const char* declaration, const auto& put) {
+      out << "        " << declaration << " = [";
       std::uint64_t p = 0;
       for (std::uint64_t i = 0; i < s.strands; ++i)
         for (std::uint32_t k = 0, n = s.points_in(i); k < n; ++k, ++p) {
           if (p) out << ((p % 16) ? ", " : ",\n        ");
-          put_float(out, s.width(i, k));
+          put(i, k);
         }
       out << "] (\n            interpolation = \"vertex\"\n        )\n";
-    }
-    if (s.color) {
-      // USD's displayColor is linear; Blender's importer and usdview show it on the curves.
-      out << "        color3f[] primvars:displayColor = [";
-      std::uint64_t p = 0;
-      for (std::uint64_t i = 0; i < s.strands; ++i)
-        for (std::uint32_t k = 0, n = s.points_in(i); k < n; ++k, ++p) {
-          if (p) out << ((p % 16) ? ", " : ",\n        ");
-          const glm::vec3 c = s.color(i, k);
-          put_tuple(out, &c.x, 3);
-        }
-      out << "] (\n            interpolation = \"vertex\"\n        )\n";
-    }
+    };
+    if (s.width) put_per_point("float[] widths", [&](std::uint64_t i, std::uint32_t k) { put_float(out, s.width(i, k)); });
+    if (s.color)  // USD's displayColor is linear; Blender's importer and usdview show it on the curves.
+      put_per_point("color3f[] primvars:displayColor", [&](std::uint64_t i, std::uint32_t k) {
+        const glm::vec3 c = s.color(i, k);
+        put_tuple(out, &c.x, 3);
+      });
     if (s.region) {
       out << "        int[] primvars:region = ";
       put_array(out, s.strands, [&](std::uint64_t i) { put_integer(out, s.region(i)); });

@@ -96,9 +96,17 @@ WeightsFile parse_weights(std::string_view text, const std::string& where) {
     NamedTensor t;
     try {
       t.name = entry.at("name").get<std::string>();
-      t.shape = entry.at("shape").get<std::vector<std::uint64_t>>();
-      const std::uint64_t offset = entry.at("offset").get<std::uint64_t>();
-      const std::uint64_t count = entry.at("count").get<std::uint64_t>();
+      // Sizes and offsets are whole numbers >= 0: json's own conversion turns 4e30 or -1 into garbage.
+      const auto whole = [&](const json& v, const char* field) {
+        if (!v.is_number_unsigned())
+          throw InputError(where + ": tensor '" + t.name + "' " + field + " " + v.dump() + " is not a whole number >= 0");
+        return v.get<std::uint64_t>();
+      };
+      const json& shape = entry.at("shape");
+      if (!shape.is_array()) throw InputError(where + ": tensor '" + t.name + "' shape is not a list");
+      for (const json& d : shape) t.shape.push_back(whole(d, "shape"));
+      const std::uint64_t offset = whole(entry.at("offset"), "offset");
+      const std::uint64_t count = whole(entry.at("count"), "count");
       if (count != element_count(t.shape))
         throw InputError(where + ": tensor '" + t.name + "' has count " + std::to_string(count) + " but shape " +
                          shape_text(t.shape));
