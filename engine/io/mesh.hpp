@@ -1,6 +1,7 @@
 #pragma once
 // Mesh files: PLY, OBJ and glTF readers and writers of geometry::Mesh.
 #include <filesystem>
+#include <span>
 
 #include "engine/geometry/mesh.hpp"
 #include "engine/io/file_frame.hpp"
@@ -48,8 +49,11 @@ void write_mesh_obj(const std::filesystem::path& path, const Mesh& mesh);
 // read_skeleton_gltf reads such a file's first skin back (joint names, parents, bind positions,
 // the first primitive's influences); InputError when the file has no skin or it is malformed.
 Mesh read_mesh_gltf(const std::filesystem::path& path);
-// `frame` is stated in the asset's generator (file_frame.hpp).
-void write_mesh_glb(const std::filesystem::path& path, const Mesh& mesh, const Skeleton* skeleton = nullptr, FileFrame frame = FileFrame::scene);
+// `frame` is stated in the asset's generator (file_frame.hpp). `vertex_colors` (linear RGB per
+// vertex, or empty) become COLOR_0 (FLOAT VEC3, glTF's linear convention), which Blender imports as
+// a colour attribute.
+void write_mesh_glb(const std::filesystem::path& path, const Mesh& mesh, const Skeleton* skeleton = nullptr, FileFrame frame = FileFrame::scene,
+                    std::span<const float> vertex_colors = {});
 Skeleton read_skeleton_gltf(const std::filesystem::path& path);
 
 // By extension (.ply, .obj, .glb, .gltf).

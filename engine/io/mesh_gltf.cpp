@@ -389,16 +389,21 @@ Mesh read_mesh_gltf(const std::filesystem::path& path) {
   return MeshBuilder(model, path.string()).build();
 }
 
-void write_mesh_glb(const std::filesystem::path& path, const Mesh& m, const Skeleton* skeleton, FileFrame frame) {
+void write_mesh_glb(const std::filesystem::path& path, const Mesh& m, const Skeleton* skeleton, FileFrame frame,
+                    std::span<const float> vertex_colors) {
   const std::string where = path.string();
   m.validate(where);
+  if (!vertex_colors.empty() && vertex_colors.size() != 3 * m.vertex_count())
+    throw InputError(where + ": " + std::to_string(vertex_colors.size() / 3) + " vertex colours for " + std::to_string(m.vertex_count()) + " vertices");
+  for (const float c : vertex_colors)
+    if (!std::isfinite(c) || c < 0.f) throw InputError(where + ": a vertex colour of " + std::to_string(c) + " (linear RGB must be finite and >= 0)");
   if (skeleton) skeleton->validate(where, m.vertex_count());
   for (std::size_t v = 0; v < m.regions.size(); ++v)
     if (m.regions[v] > kFloatRegionLimit || m.regions[v] < -kFloatRegionLimit)
       throw InputError(where + ": region " + std::to_string(m.regions[v]) + " of vertex " + std::to_string(v) +
                        " is beyond +-2^24, which the FLOAT _REGION attribute cannot hold exactly");
   const std::uint64_t n = m.vertex_count(), corners = m.triangles.size();
-  const std::uint64_t bin = 4 * (3 * n + m.normals.size() + m.regions.size() + corners) +
+  const std::uint64_t bin = 4 * (3 * n + m.normals.size() + m.regions.size() + corners + vertex_colors.size()) +
                             (skeleton ? 24 * n + 64 * skeleton->joint_count() : 0);
   if (bin > 0xFFFFFFFFull - 65536)  // the JSON of one mesh needs far less than the 64 KiB kept for it
     throw InputError(where + ": the mesh needs " + std::to_string(bin) + " bytes, beyond the 4 GiB a GLB can hold");
@@ -442,6 +447,8 @@ void write_mesh_glb(const std::filesystem::path& path, const Mesh& m, const Skel
       const std::vector<float> regions(m.regions.begin(), m.regions.end());
       primitive.attributes["_REGION"] = add(regions.data(), n, kFloat, TINYGLTF_TYPE_SCALAR, TINYGLTF_TARGET_ARRAY_BUFFER);
     }
+    if (!vertex_colors.empty())
+      primitive.attributes["COLOR_0"] = add(vertex_colors.data(), n, kFloat, TINYGLTF_TYPE_VEC3, TINYGLTF_TARGET_ARRAY_BUFFER);
     primitive.mode = corners ? TINYGLTF_MODE_TRIANGLES : TINYGLTF_MODE_POINTS;
     if (corners)
       primitive.indices = add(m.triangles.data(), corners, kUInt, TINYGLTF_TYPE_SCALAR, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);

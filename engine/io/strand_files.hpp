@@ -52,6 +52,7 @@ void write_strands_obj(const std::filesystem::path& path, const StrandStream& st
 struct UsdaScene {
   double meters_per_unit = 0;  // stated in the layer's metadata when > 0
   const geometry::Mesh* body = nullptr;
+  std::span<const float> body_colors;  // linear RGB per body vertex (primvars:displayColor), or empty
   std::function<std::uint32_t(std::uint64_t)> root_face;
   std::function<glm::vec3(std::uint64_t)> root_barycentric;
 };

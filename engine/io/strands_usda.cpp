@@ -83,7 +83,7 @@ void put_extent(std::ostream& out, const float lo[3], const float hi[3]) {
   out << "]\n";
 }
 
-void write_body_prim(std::ostream& out, const geometry::Mesh& m) {
+void write_body_prim(std::ostream& out, const geometry::Mesh& m, std::span<const float> colors) {
   out << "    def Mesh \"body\"\n    {\n        uniform token subdivisionScheme = \"none\"\n        uniform token orientation = \"rightHanded\"\n";
   out << "        int[] faceVertexCounts = ";
   put_array(out, m.triangle_count(), [&](std::uint64_t) { out << '3'; });
@@ -107,6 +107,12 @@ void write_body_prim(std::ostream& out, const geometry::Mesh& m) {
   if (!m.regions.empty()) {
     out << "        int[] primvars:region = ";
     put_array(out, m.vertex_count(), [&](std::uint64_t i) { put_integer(out, m.regions[i]); });
+    out << " (\n            interpolation = \"vertex\"\n        )\n";
+  }
+  if (!colors.empty()) {
+    NF_CHECK(colors.size() == 3 * m.vertex_count(), "USD: body colours of another mesh");
+    out << "        color3f[] primvars:displayColor = ";
+    put_array(out, m.vertex_count(), [&](std::uint64_t i) { put_tuple(out, &colors[3 * i], 3); });
     out << " (\n            interpolation = \"vertex\"\n        )\n";
   }
   out << "    }\n";
@@ -179,7 +185,7 @@ void write_strands_usda(const std::filesystem::path& path, const StrandStream& s
       out << " (\n            interpolation = \"uniform\"\n        )\n";
     }
     out << "    }\n";
-    if (scene.body) write_body_prim(out, *scene.body);
+    if (scene.body) write_body_prim(out, *scene.body, scene.body_colors);
     out << "}\n";
   });
 }

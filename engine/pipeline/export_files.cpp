@@ -117,6 +117,7 @@ json write_export(OutputFolder& folder, const GroomInput& g, const ExportScene& 
       (g.color_controls && g.colors.size() != n * g.color_controls * 3))
     throw InternalError("export: per-strand arrays do not match the strand count");
   NF_CHECK(sc.bald_world && sc.skeleton, "export: the body and its skeleton are needed");
+  NF_CHECK(sc.body_colors.empty() || sc.body_colors.size() == 3 * sc.bald_world->vertex_count(), "export: body colours of another mesh");
   const geometry::Mesh body_export = exporter::to_export(*sc.bald_world, sc.frame);
   const bool posed = !sc.skinning.empty();
   const geometry::Mesh posed_export = posed ? exporter::skin_mesh(body_export, *sc.skeleton, sc.skinning) : body_export;
@@ -150,6 +151,7 @@ json write_export(OutputFolder& folder, const GroomInput& g, const ExportScene& 
       io::UsdaScene usd;
       usd.meters_per_unit = 1.0;
       usd.body = &posed_export;
+      usd.body_colors = sc.body_colors;
       usd.root_face = [&g](std::uint64_t i) { return g.root_face[i]; };
       usd.root_barycentric = [&g](std::uint64_t i) { return g.root_barycentric[i]; };
       io::write_strands_usda(path, s, usd);
@@ -172,7 +174,7 @@ json write_export(OutputFolder& folder, const GroomInput& g, const ExportScene& 
     for (std::size_t j = 0; j < skeleton.joint_count(); ++j)
       skeleton.joint_positions[j] = glm::vec3(sc.skinning[j] * glm::vec4(skeleton.joint_positions[j], 1.f));
   const fs::path glb = folder.claim("body.glb");
-  io::write_mesh_glb(glb, posed_export, &skeleton, io::FileFrame::exported);
+  io::write_mesh_glb(glb, posed_export, &skeleton, io::FileFrame::exported, sc.body_colors);
   files.push_back({{"file", "body.glb"}, {"bytes", fs::file_size(glb)}});
   {
     io::NpyWrite face{"face", {n}, "<u4", {}}, bary{"barycentric", {n, 3}, "<f4", {}}, region{"region", {n}, "<i4", {}};
@@ -223,6 +225,8 @@ json write_export(OutputFolder& folder, const GroomInput& g, const ExportScene& 
     look.radius = float(0.75 * distance / ring[0].fy);
     synth::BodyLook body_look;
     body_look.vertex_colors.assign(posed_export.vertex_count(), synth::linear(glm::vec3(0.62f)));
+    for (std::size_t v = 0; v < sc.body_colors.size() / 3; ++v)
+      body_look.vertex_colors[v] = {sc.body_colors[3 * v], sc.body_colors[3 * v + 1], sc.body_colors[3 * v + 2]};
     synth::RenderOptions render_options;
     render_options.samples_per_axis = 2;
     const synth::StrandRenderer renderer(posed_export, body_look, subset, look, render_options);

@@ -27,7 +27,7 @@ struct ExportOptions {
   double width_scale = 1;                     // the root width as a multiple of a hair's diameter
   int turntable_frames = 12;                  // previews: frames around the animal (0: none)
   int compare_views = 3;                      // previews: held-out photos beside the groom's render (0: none)
-  int preview_size = 384;                     // previews: longer side in pixels
+  int preview_size = 512;                     // previews: longer side in pixels
   int preview_strands = 30000;                // previews: strands drawn (an even subset)
   // The formats as a list; UsageError naming an unknown one.
   std::vector<std::string> format_list() const;
@@ -51,6 +51,9 @@ struct ExportScene {
   const io::Skeleton* skeleton = nullptr;      // export frame, bound to bald_world's vertices
   exporter::ExportFrame frame;
   std::array<double, body::kRegionCount> hair_diameter_mm{};  // a hair's diameter at the root, per region
+  // The body's colours from the photos (fur/body_colors.hpp): linear RGB per vertex of bald_world,
+  // or empty (body.glb then has no COLOR_0 and the previews draw the body grey).
+  std::vector<float> body_colors;
   // Previews: the scene's cameras and which are held out (photo beside the render).
   const io::Scene* scene = nullptr;
   std::vector<std::uint32_t> compare_cameras;

@@ -23,12 +23,12 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 3;  // 2: the strands' colours; 3: index.html
+constexpr int kStageVersion = 4;  // 2: the strands' colours; 3: index.html; 4: the body's colours
 
 ExportOptions export_preset(const std::string& quality) {
   ExportOptions o;
-  if (quality == "draft") o.turntable_frames = 8, o.compare_views = 2, o.preview_size = 256, o.preview_strands = 20000;
-  else if (quality == "paper") o.turntable_frames = 24, o.compare_views = 5, o.preview_size = 512, o.preview_strands = 60000;
+  if (quality == "draft") o.turntable_frames = 8, o.compare_views = 2, o.preview_size = 512, o.preview_strands = 20000;
+  else if (quality == "paper") o.turntable_frames = 24, o.compare_views = 5, o.preview_size = 768, o.preview_strands = 60000;
   return o;
 }
 
@@ -164,6 +164,16 @@ GroomInput read_groom(const fs::path& strands, const fs::path& regions, const fs
   return g;
 }
 
+std::vector<float> read_body_colors(const fs::path& work, std::uint64_t vertices) {
+  const fs::path file = fur_outputs(work).body_colors();
+  if (!fs::exists(file)) return {};  // fur.color_controls=0, or a fur stage made before body colours
+  if (const std::size_t rows = io::read_npz_array(file, "seen").values.size(); rows != vertices) {
+    log::warn(file.string(), ": colours for ", rows, " vertices, but the body has ", vertices, " (a fur stage on another body); the body stays grey");
+    return {};
+  }
+  return fur::read_strand_colors(file, vertices).rgb;
+}
+
 std::vector<fs::path> ExportStage::inputs(const StageContext& c) const {
   const FurOutputs f = fur_outputs(c.work);
   const BodyOutputs b = body_outputs(c.work);
@@ -171,6 +181,7 @@ std::vector<fs::path> ExportStage::inputs(const StageContext& c) const {
                               knowledge_outputs(c.work).knowledge(), knowledge_outputs(c.work).scale()};
   if (fs::exists(f.roots())) files.push_back(f.roots());
   if (fs::exists(f.colors())) files.push_back(f.colors());
+  if (fs::exists(f.body_colors())) files.push_back(f.body_colors());
   const std::string model = resolve_settings(body_settings(), c).model;
   if (!model.empty()) files.push_back(model);
   return files;
@@ -196,6 +207,7 @@ json ExportStage::run(StageContext& c, const fs::path& out_dir, const fs::path&)
 
   ExportScene scene;
   scene.bald_world = &bald;
+  scene.body_colors = read_body_colors(c.work, bald.vertex_count());
   scene.frame = exporter::export_frame(read_animal_to_world(b), cm, bald);
   const io::Skeleton skeleton = exporter::transfer_rig(model, fit, bald, scene.frame);
   scene.skeleton = &skeleton;

@@ -59,5 +59,9 @@ ExportOptions preview_options(const std::string& quality, const std::string& for
 // same body). InputError when the counts disagree, naming the files.
 GroomInput read_groom(const std::filesystem::path& strands, const std::filesystem::path& regions, const std::filesystem::path& roots,
                       const std::filesystem::path& work);
+// The fur stage's body colours in `work` (fur/body_colors.npz) for a body of `vertices` vertices:
+// linear RGB per vertex, or empty when there are none or they belong to another body (a fur stage
+// on the true body, `fur.truth=all`; said in a warning). InputError when the file is malformed.
+std::vector<float> read_body_colors(const std::filesystem::path& work, std::uint64_t vertices);
 
 }  // namespace nf::pipeline

@@ -19,6 +19,7 @@
 #include "engine/fur/fur_model_file.hpp"
 #include "engine/fur/fur_resolution.hpp"
 #include "engine/fur/fur_view_file.hpp"
+#include "engine/fur/body_colors.hpp"
 #include "engine/fur/strand_colors.hpp"
 #include "engine/fur/ground_truth_inputs.hpp"
 #include "engine/gpu/context.hpp"
@@ -46,7 +47,7 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 5;  // 2: fur/roots.npz when the groom has roots of its own; 3: selection, length factors; 4: the selection trades held-out orientation against the envelope; 5: strand colours
+constexpr int kStageVersion = 6;  // 2: fur/roots.npz when the groom has roots of its own; 3: selection, length factors; 4: the selection trades held-out orientation against the envelope; 5: strand colours; 6: body colours
 
 }  // namespace
 
@@ -501,6 +502,12 @@ json color_groom(StageContext& c, const FurSettings& s, const FurInputs& in, con
   json report = colors.report;
   log::info("fur: strand colours from ", views.size(), " photos in ", report["seconds"].get<double>(), " s; ",
             100.0 * report["strands_seen"].get<double>(), " % of the strands seen, the rest filled from their neighbours");
+  // The body's colours (the export's body material), on the M_bald the export reads.
+  const fur::StrandColors body = fur::color_body(c.gpu, c.scene, views, *in.envelope, in.bald, o);
+  fur::write_strand_colors(out.body_colors(), body);
+  report["body"] = body.report;
+  log::info("fur: body colours for ", in.bald.vertex_count(), " vertices in ", body.report["seconds"].get<double>(), " s; ",
+            100.0 * body.report["strands_seen"].get<double>(), " % seen");
   if (gt.colors) {
     const metrics::GroomColors groom{g.controls.roots, colors.seen, [&](std::uint64_t i, float t) { return colors.at(i, t); }, s.color_controls};
     report["ground_truth"] = metrics::color_scores(groom, *gt.colors, s.metric_strands);

@@ -20,6 +20,7 @@ struct FurOutputs {
   std::filesystem::path roots() const { return dir / "roots.npz"; }         // when the groom's roots are not frames/roots.npz
   std::filesystem::path curve() const { return dir / "curve.jsonl"; }       // with curve_seconds: scores against training time
   std::filesystem::path colors() const { return dir / "colors.npz"; }       // `rgb` (strands x controls x 3, linear) and `seen` per strand
+  std::filesystem::path body_colors() const { return dir / "body_colors.npz"; }  // the same per vertex of M_bald (one control)
 };
 inline FurOutputs fur_outputs(const std::filesystem::path& work) { return {work / "fur"}; }
 // The roots file of the groom in fur/strands.hair (one root per strand, same order): fur/roots.npz

@@ -75,6 +75,7 @@ json run_edit(gpu::Context& context, const EditOptions& o) {
   const GroomInput groom = read_groom(SceneGroom{o.out}.strands(), SceneGroom{o.out}.regions(), SceneGroom{o.out}.roots(), o.work);
   ExportScene scene;
   scene.bald_world = &bald;
+  scene.body_colors = read_body_colors(o.work, bald.vertex_count());
   scene.frame = read_export_frame(export_outputs(o.work));
   const io::Skeleton skeleton = read_export_skeleton(o.work, bald);
   scene.skeleton = &skeleton;

@@ -64,6 +64,7 @@ json run_pose(const PoseOptions& o) {
   const knowledge::Knowledge knowledge = knowledge::read_knowledge(knowledge_outputs(o.work).knowledge());
   ExportScene scene;
   scene.bald_world = &bald;
+  scene.body_colors = read_body_colors(o.work, bald.vertex_count());
   scene.frame = read_export_frame(export_outputs(o.work));
   scene.skeleton = &skeleton;
   scene.hair_diameter_mm = exporter::region_hair_diameter_mm(knowledge, {});

@@ -115,6 +115,57 @@ fed = bsdf is not None and bsdf.inputs["Color"].is_linked and bsdf.inputs["Color
 check("hair material", fed, f"material {material.name if material else None}: Principled Hair BSDF {'fed by the strand_color attribute' if fed else 'missing or not fed'}")
 
 
+def glb_vertex_colors(path):
+    """body.glb's COLOR_0 (linear RGB per vertex), read from the file itself, or None."""
+    import struct
+    data = open(path, "rb").read()
+    length = struct.unpack_from("<I", data, 12)[0]
+    gltf = json.loads(data[20:20 + length])
+    binary = data[20 + length + 8:]
+    primitive = gltf["meshes"][0]["primitives"][0]
+    if "COLOR_0" not in primitive["attributes"]:
+        return None
+    accessor = gltf["accessors"][primitive["attributes"]["COLOR_0"]]
+    view = gltf["bufferViews"][accessor["bufferView"]]
+    start = view.get("byteOffset", 0) + accessor.get("byteOffset", 0)
+    return np.frombuffer(binary, np.float32, 3 * accessor["count"], start).reshape(-1, 3)
+
+
+# The body's colours: body.glb's COLOR_0 as the body's colour attribute (per vertex or per corner,
+# as the importer chooses), and a material fed by it.
+want = glb_vertex_colors(os.path.join(folder, "body.glb"))
+body = bpy.data.objects[report["body"]]
+name = report["body_colors"]
+if want is None:
+    check("body colours", name is None, "body.glb has no COLOR_0; the body has " + ("none" if name is None else f"an attribute {name}"))
+else:
+    attribute = body.data.color_attributes.get(name) if name else None
+    off = None
+    if attribute is not None:
+        rgba = np.empty(4 * len(attribute.data), np.float32)
+        attribute.data.foreach_get("color", rgba)
+        got = rgba.reshape(-1, 4)[:, :3]
+        if attribute.domain == "CORNER":
+            vertex_of = np.empty(len(body.data.loops), np.int64)
+            body.data.loops.foreach_get("vertex_index", vertex_of)
+            expected = want[vertex_of]
+        else:
+            expected = want[:len(got)]
+        # The importer keeps glTF's vertex order only up to its own de-duplication: compare where
+        # the counts agree, else the means.
+        off = float(np.abs(got - expected).max()) if len(got) == len(expected) else float(np.abs(got.mean(0) - want.mean(0)).max())
+    # Byte colours hold 8-bit sRGB: about 0.01 in linear light near white.
+    check("body colours", attribute is not None and off < 0.02,
+          f"attribute {name} ({'absent' if attribute is None else attribute.domain + ', ' + attribute.data_type}); "
+          f"largest difference from body.glb's COLOR_0 {'n/a' if off is None else f'{off:.4f}'}")
+    surface = next((n for n in body.data.materials[0].node_tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled"), None) \
+        if len(body.data.materials) else None
+    fed = surface is not None and surface.inputs["Base Color"].is_linked and \
+        surface.inputs["Base Color"].links[0].from_node.bl_idname == "ShaderNodeAttribute" and \
+        surface.inputs["Base Color"].links[0].from_node.attribute_name == name
+    check("body material", fed, f"material {report['body_material']}: Principled BSDF {'fed by ' + str(name) if fed else 'missing or not fed'}")
+
+
 def render_curves():
     """The hair alone (body hidden) in a small Cycles render under a white sky: its mean colour's
     chromaticity (r, g, b over their sum), weighted by coverage."""

@@ -529,6 +529,25 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
     CHECK(usd_off == 0);
     CHECK(ply_off == 0);  // 8-bit sRGB: within half a step
     CHECK(hi > lo);       // not one flat colour
+    // The body's colours (fur/body_colors.npz): body.glb's COLOR_0, a colour per vertex, not flat.
+    CHECK(fs::exists(work / "fur" / "body_colors.npz"));
+    CHECK(fur_summary["colors"]["body"]["strands_seen"].get<double>() > 0.5);
+    {
+      const std::string glb = slurp(work / "export" / "body.glb");
+      std::uint32_t n_json;
+      std::memcpy(&n_json, glb.data() + 12, 4);
+      const nf::json d = nf::json::parse(glb.substr(20, n_json));
+      const auto& attributes = d["meshes"][0]["primitives"][0]["attributes"];
+      REQUIRE(attributes.contains("COLOR_0"));
+      const auto& a = d["accessors"][attributes["COLOR_0"].get<int>()];
+      CHECK(a["count"] == d["accessors"][attributes["POSITION"].get<int>()]["count"]);
+      const auto& view = d["bufferViews"][a["bufferView"].get<int>()];
+      std::vector<float> rgb(3 * a["count"].get<std::size_t>());
+      std::memcpy(rgb.data(), glb.data() + 20 + n_json + 8 + view["byteOffset"].get<std::size_t>(), 4 * rgb.size());
+      const auto [body_lo, body_hi] = std::minmax_element(rgb.begin(), rgb.end());
+      CHECK(*body_lo >= 0.f);
+      CHECK(*body_hi > *body_lo);
+    }
     // index.html: every image and file it links is in the folder, with the figures measured.
     const std::string page = slurp(work / "export" / "index.html");
     std::size_t links = 0;

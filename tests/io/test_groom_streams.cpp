@@ -147,6 +147,8 @@ TEST_CASE("a .usda groom with its body: prims, types and array lengths as USD re
   UsdaScene scene;
   scene.meters_per_unit = 1;
   scene.body = &body;
+  const std::vector<float> body_colors = {0.1f, 0.2f, 0.3f, 0.4f, 0.5f, 0.6f, 0.7f, 0.8f, 0.9f, 1.f, 0.5f, 0.f};
+  scene.body_colors = body_colors;
   scene.root_face = [](std::uint64_t i) { return std::uint32_t(i % 4); };
   scene.root_barycentric = [](std::uint64_t) { return glm::vec3(0.2f, 0.3f, 0.5f); };
   const fs::path path = temp("groom.usda");
@@ -178,6 +180,8 @@ TEST_CASE("a .usda groom with its body: prims, types and array lengths as USD re
   CHECK(array_length(m, "point3f[] points", 3) == 4);
   CHECK(array_length(m, "normal3f[] normals", 3) == 4);
   CHECK(array_length(m, "int[] primvars:region", 1) == 4);
+  CHECK(array_length(m, "color3f[] primvars:displayColor", 3) == 4);  // the body's colours, per vertex
+  CHECK(m.find("(0.7, 0.8, 0.9)") != std::string::npos);
   // The reader takes the curves, not the body that follows.
   const StrandSet r = read_strands_usda(path);
   CHECK(r.points == s.points);

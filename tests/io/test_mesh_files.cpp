@@ -210,6 +210,31 @@ TEST_CASE("GLB meshes round-trip exactly: with and without normals / regions, em
   big.regions[2] = 16777217;
   CHECK_THROWS_WITH_AS(write_mesh_glb(path, big), doctest::Contains("vertex 2"), InputError);
   CHECK_THROWS_WITH_AS(write_mesh(temp("x.gltf"), big), doctest::Contains("use .glb"), InputError);
+  // Vertex colours: COLOR_0, FLOAT VEC3, the values as given; the mesh reads back the same; a
+  // count that is not the vertices' or a negative colour is refused, naming the file.
+  const std::vector<float> colors = {0.f, 0.25f, 1.f, 0.5f, 0.5f, 0.5f, 1.f, 0.f, 0.f, 0.02f, 0.9f, 0.3f};
+  write_mesh_glb(path, tetrahedron(true), nullptr, nf::io::FileFrame::scene, colors);
+  {
+    const std::string b = slurp(path);
+    std::uint32_t n_json, n_bin;
+    std::memcpy(&n_json, b.data() + 12, 4);
+    std::memcpy(&n_bin, b.data() + 20 + n_json, 4);
+    const nf::json d = nf::json::parse(b.substr(20, n_json));
+    const auto& a = d["accessors"][d["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"].get<int>()];
+    CHECK(a["componentType"] == 5126);
+    CHECK(a["type"] == "VEC3");
+    CHECK(a["count"] == 4);
+    const auto& view = d["bufferViews"][a["bufferView"].get<int>()];
+    std::vector<float> stored(12);
+    std::memcpy(stored.data(), b.data() + 20 + n_json + 8 + view["byteOffset"].get<std::size_t>(), 48);
+    CHECK(stored == colors);
+    CHECK(read_mesh(path).positions == tetrahedron(true).positions);
+  }
+  CHECK_THROWS_WITH_AS(write_mesh_glb(path, tetrahedron(true), nullptr, nf::io::FileFrame::scene, std::span<const float>(colors).first(9)),
+                       doctest::Contains("3 vertex colours for 4 vertices"), InputError);
+  std::vector<float> negative = colors;
+  negative[4] = -0.5f;
+  CHECK_THROWS_WITH_AS(write_mesh_glb(path, tetrahedron(true), nullptr, nf::io::FileFrame::scene, negative), doctest::Contains(path.string().c_str()), InputError);
   fs::remove(path);
 }
 

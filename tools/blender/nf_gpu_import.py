@@ -8,6 +8,7 @@
 # import"; then File > Import > nf_gpu groom (pick the export folder's export.json).
 # Headless:   blender -b -P tools/blender/nf_gpu_import.py -- EXPORT_DIR [--save OUT.blend]
 #             [--max-strands N] [--points-per-strand P] [--report REPORT.json]
+#             [--render OUT.png [--size W H] [--samples S]]   (a Cycles still: front three-quarter view)
 #
 # Debian's Blender 3.4 is built without USD and Alembic, which is why this add-on exists: it reads
 # the formats nf_gpu writes (glTF and Cem Yuksel's .hair) with Blender's own glTF importer and a
@@ -106,7 +107,39 @@ def import_body(folder):
     armature = next((o for o in new if o.type == "ARMATURE"), None)
     if body is None:
         raise RuntimeError(f"{folder}/body.glb: no mesh was imported")
+    colors = body_color_attribute(body)
+    if colors is not None:
+        body.data.materials.clear()
+        body.data.materials.append(body_material("nf_gpu body", colors))
     return body, armature
+
+
+def body_color_attribute(body):
+    """The name of the body's colour attribute (glTF COLOR_0: the body's colours from the photos),
+    or None. The importer's name for it differs between Blender versions ("Col", "Color")."""
+    attributes = getattr(body.data, "color_attributes", None)
+    if attributes is not None and len(attributes):
+        return attributes[0].name
+    return None
+
+
+def body_material(name, attribute_name):
+    """A matte material for the body fed by its colour attribute: where the coat parts or is thin
+    the body shows the fur's colour there, and bald skin (nose, pads) its own."""
+    material = bpy.data.materials.new(name)
+    material.use_nodes = True
+    nodes, links = material.node_tree.nodes, material.node_tree.links
+    nodes.clear()
+    attribute = nodes.new("ShaderNodeAttribute")
+    attribute.attribute_name = attribute_name
+    surface = nodes.new("ShaderNodeBsdfPrincipled")
+    surface.inputs["Roughness"].default_value = 0.8
+    surface.inputs["Specular"].default_value = 0.2
+    output = nodes.new("ShaderNodeOutputMaterial")
+    links.new(attribute.outputs["Color"], surface.inputs["Base Color"])
+    links.new(surface.outputs[0], output.inputs["Surface"])
+    attribute.location, surface.location, output.location = (-400, 0), (-150, 0), (150, 0)
+    return material
 
 
 def hair_material(name):
@@ -237,6 +270,8 @@ def import_groom(folder, max_strands=0, points_per_strand=0):
         "attached_curves": int(np.count_nonzero(np.abs(uv.reshape(-1, 2)).sum(axis=1) > 0)),
         "body": body.name,
         "body_vertices": len(body.data.vertices),
+        "body_colors": body_color_attribute(body),
+        "body_material": body.data.materials[0].name if len(body.data.materials) else None,
         "armature": armature.name if armature else None,
         "bones": len(armature.data.bones) if armature else 0,
         "strands_exported": record.get("strands"),
@@ -279,6 +314,50 @@ def unregister():
     bpy.utils.unregister_class(ImportNfGpuGroom)
 
 
+def render_still(report, path, size=(800, 600), samples=32):
+    """A Cycles still of the imported groom and body from the animal's front left, under a sky and a
+    sun. A subset of the strands is widened by the share left out, so the coat covers as the whole
+    groom would."""
+    from mathutils import Vector
+    scene = bpy.context.scene
+    hair, body = bpy.data.objects["nf_gpu_fur"], bpy.data.objects[report["body"]]
+    shown = max(1, report["curves"])
+    radius = hair.data.attributes.get("radius")
+    if radius is not None and report["strands_in_file"] > shown:
+        r = np.empty(len(radius.data), np.float32)
+        radius.data.foreach_get("value", r)
+        radius.data.foreach_set("value", r * float(report["strands_in_file"]) / shown)
+    corners = [body.matrix_world @ Vector(c) for c in body.bound_box]
+    lo = Vector([min(c[i] for c in corners) for i in range(3)])
+    hi = Vector([max(c[i] for c in corners) for i in range(3)])
+    centre, extent = (lo + hi) / 2, max(hi - lo)
+    camera = bpy.data.objects.new("nf_gpu camera", bpy.data.cameras.new("nf_gpu camera"))
+    scene.collection.objects.link(camera)
+    camera.data.lens = 50
+    # glTF's +z forward is Blender's -y: the animal looks along -y, its left is +x.
+    camera.location = centre + extent * Vector((1.1, -1.7, 0.55))
+    camera.rotation_euler = (centre - camera.location).to_track_quat("-Z", "Y").to_euler()
+    scene.camera = camera
+    sun = bpy.data.objects.new("nf_gpu sun", bpy.data.lights.new("nf_gpu sun", "SUN"))
+    sun.data.energy = 3.0
+    sun.rotation_euler = (0.7, 0.2, 0.6)
+    scene.collection.objects.link(sun)
+    scene.world = scene.world or bpy.data.worlds.new("nf_gpu sky")
+    scene.world.use_nodes = True
+    background = scene.world.node_tree.nodes["Background"]
+    background.inputs["Color"].default_value = (0.55, 0.6, 0.68, 1)
+    background.inputs["Strength"].default_value = 0.8
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = samples
+    scene.cycles.use_denoising = False  # Debian's Cycles is built without OpenImageDenoise
+    scene.render.resolution_x, scene.render.resolution_y = size
+    scene.render.resolution_percentage = 100
+    scene.render.image_settings.file_format = "PNG"
+    scene.render.filepath = os.path.abspath(path)
+    bpy.ops.render.render(write_still=True)
+
+
 def main(argv):
     import argparse
     parser = argparse.ArgumentParser(prog="blender -b -P nf_gpu_import.py --")
@@ -287,6 +366,9 @@ def main(argv):
     parser.add_argument("--max-strands", type=int, default=0, help="an even subset of the strands (0: all)")
     parser.add_argument("--points-per-strand", type=int, default=0, help="resample each strand (0: as in the file)")
     parser.add_argument("--report", help="write what was imported as JSON")
+    parser.add_argument("--render", help="render a Cycles still (PNG) of the groom and body to this file")
+    parser.add_argument("--size", type=int, nargs=2, default=(800, 600), metavar=("W", "H"), help="the still's size in pixels")
+    parser.add_argument("--samples", type=int, default=32, help="Cycles samples per pixel of the still")
     args = parser.parse_args(argv)
     bpy.ops.wm.read_factory_settings(use_empty=True)
     report = import_groom(args.folder, args.max_strands, args.points_per_strand)
@@ -294,6 +376,8 @@ def main(argv):
     if args.report:
         with open(args.report, "w") as f:
             json.dump(report, f, indent=2)
+    if args.render:
+        render_still(report, args.render, tuple(args.size), args.samples)
     if args.save:
         bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(args.save))
 
