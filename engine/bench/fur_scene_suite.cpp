@@ -100,6 +100,16 @@ json groom_summary(const json& scores) {
   return s;
 }
 
+// The strands' colours as the record keeps them: the share seen, the seconds, and on synth scenes
+// the mean Delta E against the true colours, seen and filled (issue 46's targets: 8 and 15).
+json colors_summary(const json& colors) {
+  json s{{"strands_seen", colors.value("strands_seen", 0.0)}, {"seconds", colors.value("seconds", 0.0)}};
+  if (colors.contains("ground_truth"))
+    for (const char* key : {"delta_e_seen", "delta_e_unseen"})
+      if (colors["ground_truth"][key].value("count", 0) > 0) s[key] = colors["ground_truth"][key]["mean"];
+  return s;
+}
+
 // The held-out views' scores of the groom, with the baseline groom's and the true groom's (the
 // truth's own score against the photos' Gabor maps) where the stage rendered them.
 json held_out_summary(json held) {
@@ -214,6 +224,7 @@ json run_fur_scene_suite(gpu::Context& ctx, const Options& options) {
                      {"stages", stage_seconds},
                      {"selection", m.value("selection", json::object())},
                      {"lengths", m.value("lengths", json::object())},
+                     {"colors", colors_summary(m.value("colors", json::object()))},
                      {"fur_seconds", m.at("seconds")}};
         // The baseline groom on the roots this run used: (a) on the pipeline's, (b) on the truth's.
         const bool true_inputs = std::find(swaps.begin(), swaps.end(), "fur.truth=all") != swaps.end();

@@ -315,8 +315,8 @@ def unregister():
 
 
 def render_still(report, path, size=(800, 600), samples=32):
-    """A Cycles still of the imported groom and body from the animal's front left, under a sky and a
-    sun. A subset of the strands is widened by the share left out, so the coat covers as the whole
+    """A Cycles still (PNG, or JPEG by the name) of the imported groom and body from the animal's
+    front left, under a sky and a sun. A subset of the strands is widened by the share left out, so the coat covers as the whole
     groom would."""
     from mathutils import Vector
     scene = bpy.context.scene
@@ -335,7 +335,7 @@ def render_still(report, path, size=(800, 600), samples=32):
     scene.collection.objects.link(camera)
     camera.data.lens = 50
     # glTF's +z forward is Blender's -y: the animal looks along -y, its left is +x.
-    camera.location = centre + extent * Vector((1.1, -1.7, 0.55))
+    camera.location = centre + extent * Vector((0.8, -1.3, 0.42))
     camera.rotation_euler = (centre - camera.location).to_track_quat("-Z", "Y").to_euler()
     scene.camera = camera
     sun = bpy.data.objects.new("nf_gpu sun", bpy.data.lights.new("nf_gpu sun", "SUN"))
@@ -353,7 +353,10 @@ def render_still(report, path, size=(800, 600), samples=32):
     scene.cycles.use_denoising = False  # Debian's Cycles is built without OpenImageDenoise
     scene.render.resolution_x, scene.render.resolution_y = size
     scene.render.resolution_percentage = 100
-    scene.render.image_settings.file_format = "PNG"
+    jpeg = path.lower().endswith((".jpg", ".jpeg"))
+    scene.render.image_settings.file_format = "JPEG" if jpeg else "PNG"
+    if jpeg:
+        scene.render.image_settings.quality = 90
     scene.render.filepath = os.path.abspath(path)
     bpy.ops.render.render(write_still=True)
 
@@ -366,7 +369,7 @@ def main(argv):
     parser.add_argument("--max-strands", type=int, default=0, help="an even subset of the strands (0: all)")
     parser.add_argument("--points-per-strand", type=int, default=0, help="resample each strand (0: as in the file)")
     parser.add_argument("--report", help="write what was imported as JSON")
-    parser.add_argument("--render", help="render a Cycles still (PNG) of the groom and body to this file")
+    parser.add_argument("--render", help="render a Cycles still (PNG, or JPEG for .jpg) of the groom and body to this file")
     parser.add_argument("--size", type=int, nargs=2, default=(800, 600), metavar=("W", "H"), help="the still's size in pixels")
     parser.add_argument("--samples", type=int, default=32, help="Cycles samples per pixel of the still")
     args = parser.parse_args(argv)
