@@ -32,7 +32,7 @@ StrandControls body_color_points(const geometry::Mesh& bald, const geometry::Mes
     for (std::size_t v = begin; v < end; ++v) {
       const geometry::SurfaceHit hit = locate.closest(bald.position(v));
       c.points[3 * v] = hit.point.x, c.points[3 * v + 1] = hit.point.y, c.points[3 * v + 2] = hit.point.z;
-      c.lengths[v] = std::max(hit.distance, floor);
+      c.lengths[v] = floor;  // the point lies on M_NeuS: the fur's depth does not widen its tolerance
     }
   });
   return c;
@@ -43,6 +43,7 @@ StrandColors color_body(gpu::Context& gpu, const io::Scene& scene, const std::ve
   const Stopwatch t;
   const StrandControls points = body_color_points(bald, envelope);
   options.controls = 1;
+  options.hidden_depth = 0.5;  // of two mean edges: M_NeuS's own rasterised depth, not the fur's (fur.color_hidden_depth)
   StrandColors out = color_strands(gpu, scene, views, envelope, points, options);
   out.report["vertices"] = bald.vertex_count();
   out.report["seconds"] = t.seconds();  // with finding the points on M_NeuS

@@ -15,12 +15,13 @@
 namespace nf::fur {
 
 // One control per vertex of `bald`: the vertex as the root, the nearest point of `envelope` as the
-// control, and as the "length" that point's distance, at least two of the envelope's mean edges
-// (what the depth test's tolerance scales with: a point on M_NeuS itself must pass it).
+// control, and as the "length" two of the envelope's mean edges: the depth test's tolerance (half
+// of it in color_body) is then one mean edge, which a point on M_NeuS itself passes whatever the
+// fur's depth, while a point behind another part of M_NeuS (a far leg) does not.
 StrandControls body_color_points(const geometry::Mesh& bald, const geometry::Mesh& envelope);
 
 // Per vertex of `bald`, linear RGB (vertices x 1 x 3) and whether a view saw it. `options.controls`
-// is taken as 1. Errors as color_strands.
+// is taken as 1 and `hidden_depth` as 0.5 (see above). Errors as color_strands.
 StrandColors color_body(gpu::Context& gpu, const io::Scene& scene, const std::vector<std::uint32_t>& views, const geometry::Mesh& envelope,
                         const geometry::Mesh& bald, StrandColorOptions options);
 

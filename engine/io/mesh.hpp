@@ -50,8 +50,8 @@ void write_mesh_obj(const std::filesystem::path& path, const Mesh& mesh);
 // the first primitive's influences); InputError when the file has no skin or it is malformed.
 Mesh read_mesh_gltf(const std::filesystem::path& path);
 // `frame` is stated in the asset's generator (file_frame.hpp). `vertex_colors` (linear RGB per
-// vertex, or empty) become COLOR_0 (FLOAT VEC3, glTF's linear convention), which Blender imports as
-// a colour attribute.
+// vertex in [0, 1] as glTF requires, or empty) become COLOR_0 (FLOAT VEC3), which Blender imports
+// as a colour attribute.
 void write_mesh_glb(const std::filesystem::path& path, const Mesh& mesh, const Skeleton* skeleton = nullptr, FileFrame frame = FileFrame::scene,
                     std::span<const float> vertex_colors = {});
 Skeleton read_skeleton_gltf(const std::filesystem::path& path);

@@ -396,7 +396,7 @@ void write_mesh_glb(const std::filesystem::path& path, const Mesh& m, const Skel
   if (!vertex_colors.empty() && vertex_colors.size() != 3 * m.vertex_count())
     throw InputError(where + ": " + std::to_string(vertex_colors.size() / 3) + " vertex colours for " + std::to_string(m.vertex_count()) + " vertices");
   for (const float c : vertex_colors)
-    if (!std::isfinite(c) || c < 0.f) throw InputError(where + ": a vertex colour of " + std::to_string(c) + " (linear RGB must be finite and >= 0)");
+    if (!(c >= 0.f && c <= 1.f)) throw InputError(where + ": a vertex colour of " + std::to_string(c) + " (glTF's COLOR_0 lies in [0, 1])");
   if (skeleton) skeleton->validate(where, m.vertex_count());
   for (std::size_t v = 0; v < m.regions.size(); ++v)
     if (m.regions[v] > kFloatRegionLimit || m.regions[v] < -kFloatRegionLimit)

@@ -174,7 +174,12 @@ json write_export(OutputFolder& folder, const GroomInput& g, const ExportScene& 
     for (std::size_t j = 0; j < skeleton.joint_count(); ++j)
       skeleton.joint_positions[j] = glm::vec3(sc.skinning[j] * glm::vec4(skeleton.joint_positions[j], 1.f));
   const fs::path glb = folder.claim("body.glb");
-  io::write_mesh_glb(glb, posed_export, &skeleton, io::FileFrame::exported, sc.body_colors);
+  {
+    // glTF's COLOR_0 lies in [0, 1]; the photos' colours may exceed 1 after a view's exposure gain.
+    std::vector<float> clamped(sc.body_colors);
+    for (float& c : clamped) c = std::clamp(c, 0.f, 1.f);
+    io::write_mesh_glb(glb, posed_export, &skeleton, io::FileFrame::exported, clamped);
+  }
   files.push_back({{"file", "body.glb"}, {"bytes", fs::file_size(glb)}});
   {
     io::NpyWrite face{"face", {n}, "<u4", {}}, bary{"barycentric", {n, 3}, "<f4", {}}, region{"region", {n}, "<i4", {}};

@@ -171,7 +171,9 @@ std::vector<float> read_body_colors(const fs::path& work, std::uint64_t vertices
     log::warn(file.string(), ": colours for ", rows, " vertices, but the body has ", vertices, " (a fur stage on another body); the body stays grey");
     return {};
   }
-  return fur::read_strand_colors(file, vertices).rgb;
+  const fur::StrandColors c = fur::read_strand_colors(file, vertices);
+  if (c.controls != 1) throw InputError(file.string() + ": 'rgb' should hold one colour per vertex, not " + std::to_string(c.controls) + "; rerun the fur stage");
+  return c.rgb;
 }
 
 std::vector<fs::path> ExportStage::inputs(const StageContext& c) const {

@@ -502,11 +502,14 @@ json color_groom(StageContext& c, const FurSettings& s, const FurInputs& in, con
   json report = colors.report;
   log::info("fur: strand colours from ", views.size(), " photos in ", report["seconds"].get<double>(), " s; ",
             100.0 * report["strands_seen"].get<double>(), " % of the strands seen, the rest filled from their neighbours");
-  // The body's colours (the export's body material), on the M_bald the export reads.
-  const fur::StrandColors body = fur::color_body(c.gpu, c.scene, views, *in.envelope, in.bald, o);
+  // The body's colours (the export's body material), on the M_bald the export reads: defur's, also
+  // when fur.truth=all trained on the true body.
+  const geometry::Mesh export_body = in.swapped ? io::read_mesh(defur_outputs(c.work).bald()) : geometry::Mesh{};
+  const geometry::Mesh& bald = in.swapped ? export_body : in.bald;
+  const fur::StrandColors body = fur::color_body(c.gpu, c.scene, views, *in.envelope, bald, o);
   fur::write_strand_colors(out.body_colors(), body);
   report["body"] = body.report;
-  log::info("fur: body colours for ", in.bald.vertex_count(), " vertices in ", body.report["seconds"].get<double>(), " s; ",
+  log::info("fur: body colours for ", bald.vertex_count(), " vertices in ", body.report["seconds"].get<double>(), " s; ",
             100.0 * body.report["strands_seen"].get<double>(), " % seen");
   if (gt.colors) {
     const metrics::GroomColors groom{g.controls.roots, colors.seen, [&](std::uint64_t i, float t) { return colors.at(i, t); }, s.color_controls};

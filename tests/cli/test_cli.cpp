@@ -19,6 +19,7 @@
 #include "engine/core/color.hpp"
 #include "engine/core/json.hpp"
 #include "engine/fur/roots.hpp"
+#include "engine/fur/strand_colors.hpp"
 #include "engine/io/file_frame.hpp"
 #include "engine/io/mesh.hpp"
 #include "engine/io/strand_files.hpp"
@@ -544,9 +545,16 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
       const auto& view = d["bufferViews"][a["bufferView"].get<int>()];
       std::vector<float> rgb(3 * a["count"].get<std::size_t>());
       std::memcpy(rgb.data(), glb.data() + 20 + n_json + 8 + view["byteOffset"].get<std::size_t>(), 4 * rgb.size());
-      const auto [body_lo, body_hi] = std::minmax_element(rgb.begin(), rgb.end());
-      CHECK(*body_lo >= 0.f);
-      CHECK(*body_hi > *body_lo);
+      // The fur stage's colours, vertex for vertex (clamped to glTF's [0, 1]).
+      const nf::fur::StrandColors stored = nf::fur::read_strand_colors(work / "fur" / "body_colors.npz", rgb.size() / 3);
+      REQUIRE(stored.rgb.size() == rgb.size());
+      std::size_t differ = 0;
+      for (std::size_t i = 0; i < rgb.size(); ++i) differ += std::abs(rgb[i] - std::clamp(stored.rgb[i], 0.f, 1.f)) > 1e-6f;
+      CHECK(differ == 0);
+      // Not one flat colour: the red channel varies across the vertices.
+      float red_lo = 1, red_hi = 0;
+      for (std::size_t v = 0; v < rgb.size() / 3; ++v) red_lo = std::min(red_lo, rgb[3 * v]), red_hi = std::max(red_hi, rgb[3 * v]);
+      CHECK(red_hi > red_lo + 0.05f);
     }
     // index.html: every image and file it links is in the folder, with the figures measured.
     const std::string page = slurp(work / "export" / "index.html");

@@ -211,7 +211,7 @@ TEST_CASE("GLB meshes round-trip exactly: with and without normals / regions, em
   CHECK_THROWS_WITH_AS(write_mesh_glb(path, big), doctest::Contains("vertex 2"), InputError);
   CHECK_THROWS_WITH_AS(write_mesh(temp("x.gltf"), big), doctest::Contains("use .glb"), InputError);
   // Vertex colours: COLOR_0, FLOAT VEC3, the values as given; the mesh reads back the same; a
-  // count that is not the vertices' or a negative colour is refused, naming the file.
+  // count that is not the vertices' or a colour outside [0, 1] (glTF's rule) is refused, naming the file.
   const std::vector<float> colors = {0.f, 0.25f, 1.f, 0.5f, 0.5f, 0.5f, 1.f, 0.f, 0.f, 0.02f, 0.9f, 0.3f};
   write_mesh_glb(path, tetrahedron(true), nullptr, nf::io::FileFrame::scene, colors);
   {
@@ -232,9 +232,11 @@ TEST_CASE("GLB meshes round-trip exactly: with and without normals / regions, em
   }
   CHECK_THROWS_WITH_AS(write_mesh_glb(path, tetrahedron(true), nullptr, nf::io::FileFrame::scene, std::span<const float>(colors).first(9)),
                        doctest::Contains("3 vertex colours for 4 vertices"), InputError);
-  std::vector<float> negative = colors;
-  negative[4] = -0.5f;
-  CHECK_THROWS_WITH_AS(write_mesh_glb(path, tetrahedron(true), nullptr, nf::io::FileFrame::scene, negative), doctest::Contains(path.string().c_str()), InputError);
+  for (const float bad : {-0.5f, 1.5f, std::nanf("")}) {
+    std::vector<float> out_of_range = colors;
+    out_of_range[4] = bad;
+    CHECK_THROWS_WITH_AS(write_mesh_glb(path, tetrahedron(true), nullptr, nf::io::FileFrame::scene, out_of_range), doctest::Contains(path.string().c_str()), InputError);
+  }
   fs::remove(path);
 }
 

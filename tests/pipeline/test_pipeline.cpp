@@ -9,6 +9,9 @@
 #include <stdexcept>
 
 #include "engine/core/error.hpp"
+#include "engine/fur/strand_colors.hpp"
+#include "engine/pipeline/export_stage.hpp"
+#include "engine/pipeline/fur_stage.hpp"
 #include "engine/pipeline/pipeline.hpp"
 #include "engine/pipeline/stages.hpp"
 #include "tests/support/gpu_test.hpp"
@@ -277,4 +280,24 @@ TEST_CASE("reconstruct checks every option before it touches a file") {
                        UsageError);
   CHECK_FALSE(fs::exists(o.work));  // nothing was created
   fs::remove_all(root);
+}
+
+TEST_CASE("the export reads the fur stage's body colours: none, another body's, one per vertex, not several") {
+  const fs::path work = fs::temp_directory_path() / "nf_pipeline_body_colors";
+  fs::remove_all(work);
+  fs::create_directories(work / "fur");
+  CHECK(nf::pipeline::read_body_colors(work, 3).empty());  // a fur stage without colours: the body stays grey
+  nf::fur::StrandColors c;
+  c.controls = 1;
+  c.rgb = {0.1f, 0.2f, 0.3f, 0.4f, 0.5f, 0.6f, 0.7f, 0.8f, 0.9f};
+  c.seen = {1, 1, 0};
+  const fs::path file = nf::pipeline::fur_outputs(work).body_colors();
+  nf::fur::write_strand_colors(file, c);
+  CHECK(nf::pipeline::read_body_colors(work, 3) == c.rgb);
+  CHECK(nf::pipeline::read_body_colors(work, 4).empty());  // another body (fur.truth=all's): grey, with a warning
+  c.controls = 3;
+  c.rgb.assign(27, 0.5f);
+  nf::fur::write_strand_colors(file, c);
+  CHECK_THROWS_WITH_AS(nf::pipeline::read_body_colors(work, 3), doctest::Contains("one colour per vertex"), nf::InputError);
+  fs::remove_all(work);
 }

@@ -134,7 +134,9 @@ def body_material(name, attribute_name):
     attribute.attribute_name = attribute_name
     surface = nodes.new("ShaderNodeBsdfPrincipled")
     surface.inputs["Roughness"].default_value = 0.8
-    surface.inputs["Specular"].default_value = 0.2
+    specular = surface.inputs.get("Specular") or surface.inputs.get("Specular IOR Level")  # renamed in Blender 4
+    if specular is not None:
+        specular.default_value = 0.2
     output = nodes.new("ShaderNodeOutputMaterial")
     links.new(attribute.outputs["Color"], surface.inputs["Base Color"])
     links.new(surface.outputs[0], output.inputs["Surface"])
