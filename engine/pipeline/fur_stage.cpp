@@ -21,6 +21,7 @@
 #include "engine/fur/fur_view_file.hpp"
 #include "engine/fur/body_colors.hpp"
 #include "engine/fur/strand_colors.hpp"
+#include "engine/fur/strand_shapes.hpp"
 #include "engine/fur/ground_truth_inputs.hpp"
 #include "engine/gpu/context.hpp"
 #include "engine/io/ground_truth.hpp"
@@ -42,6 +43,7 @@
 #include "engine/pipeline/frames_stage.hpp"
 #include "engine/pipeline/knowledge_stage.hpp"
 #include "engine/pipeline/preview_views.hpp"
+#include "engine/splat/rasterizer.hpp"
 
 namespace nf::pipeline {
 namespace fs = std::filesystem;
@@ -542,10 +544,22 @@ json write_previews(StageContext& c, const FurSettings& s, const FurInputs& in, 
   return previews;
 }
 
+// A step's batch and the held-out scoring each render their strands into one view at once: a count
+// the device cannot rasterise fails here, naming the setting, not at the first render after the
+// inputs are read (or after the whole training, for the scoring).
+void check_strands_per_view(const gpu::Context& gpu, const FurSettings& s) {
+  const std::uint64_t most = splat::max_segments_per_view(gpu) / fur::kStrandSegments;
+  for (const auto& [name, strands] : {std::pair<const char*, std::uint32_t>{"batch", s.training.strands}, {"score_strands", s.score_strands}})
+    if (strands > most)
+      throw UsageError("--set fur." + std::string(name) + "=" + std::to_string(strands) + ": this device renders at most " + std::to_string(most) +
+                       " strands into one view (" + std::to_string(fur::kStrandSegments) + " segments each); use fewer");
+}
+
 }  // namespace
 
 json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& resume) {
   const FurSettings s = settings_of(c);
+  check_strands_per_view(c.gpu, s);
   const FurOutputs out{out_dir};
   const Stopwatch t_all;
   json seconds = json::object();
@@ -714,6 +728,8 @@ const SettingsSchema<FurSettings>& fur_settings() {
         .add("strands", [](F& f) -> auto& { return f.strands; }, 0, 4e7, "strands inferred into strands.hair")
         .add("metric_strands", [](F& f) -> auto& { return f.metric_strands; }, 1, 1e7, "strands the metrics compare")
         .add("metric_points", [](F& f) -> auto& { return f.metric_points; }, 2, 1000, "points per strand the metrics compare")
+        .add("score_strands", [](F& f) -> auto& { return f.score_strands; }, 0, 1e7,
+             "strands rendered into the held-out views to score a groom: the selection, the curve, metrics' held_out (0: the batch)")
         .add("preview_views", [](F& f) -> auto& { return f.preview_views; }, 0, 100, "previews written")
         .add("color_controls", [](F& f) -> auto& { return f.color_controls; }, 0, 16,
              "colours along each strand taken from the photos, the last at the tip (0: no colours)")

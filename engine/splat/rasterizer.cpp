@@ -164,6 +164,8 @@ StrandRasterizer::~StrandRasterizer() = default;
 std::uint64_t StrandRasterizer::tile_entries() const { return impl_->entries; }
 std::uint32_t StrandRasterizer::walk_passes() const { return impl_->walk_passes; }
 
+std::uint64_t max_segments_per_view(const gpu::Context& context) { return gpu::max_binding_elements(context, kProjected * sizeof(float)); }
+
 void StrandRasterizer::forward(const StrandShape& shape, gpu::BufferRange points, gpu::BufferRange confidence,
                                const RasterCamera& camera, const RasterParams& params, gpu::BufferRange body_depth,
                                gpu::BufferRange image) {
@@ -171,9 +173,7 @@ void StrandRasterizer::forward(const StrandShape& shape, gpu::BufferRange points
   validate(shape, params.gaussian, points.size / 4);
   validate(camera);
   const std::uint64_t segments = shape.segments(), pixels = std::uint64_t(camera.width) * camera.height;
-  // Compositing reads any Gaussian of the view by index, so the projected Gaussians (and their
-  // gradients) must fit one storage binding: 2.8 M segments at lavapipe's 128 MiB.
-  const std::uint64_t most = gpu::max_binding_elements(m.context, kProjected * sizeof(float));
+  const std::uint64_t most = max_segments_per_view(m.context);
   if (segments > most)
     throw InputError("strands: " + std::to_string(segments) + " segments in one view; this device rasterises at most " +
                      std::to_string(most) + " (one " + std::to_string(most * kProjected * 4 / (1024 * 1024)) +

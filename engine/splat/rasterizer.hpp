@@ -24,6 +24,11 @@ void validate(const RasterCamera& camera);
 // The rasteriser's camera for a scene camera (same pixel and axis conventions).
 RasterCamera raster_camera(const io::Camera& camera, double near, double far);
 
+// The most segments one view may hold on this device: compositing reads any Gaussian of the view by
+// index, so the projected Gaussians (and their gradients) must fit one storage binding (2.8 M
+// segments at lavapipe's 128 MiB).
+std::uint64_t max_segments_per_view(const gpu::Context& context);
+
 class StrandRasterizer {
  public:
   explicit StrandRasterizer(gpu::Context& context);

@@ -468,6 +468,19 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
   CHECK(fur_summary["lengths"]["cm_per_unit_used"].get<double>() == doctest::Approx(nf::json::parse(std::ifstream(work / "fur" / "scale.json"))["cm_per_unit"].get<double>()));
   CHECK(fur_summary["views"]["fur_pixels_median"].get<double>() > 0.2);
   CHECK(fur_summary["views"]["fur_pixels_median"].get<double>() < 1.5);
+  {
+    // A batch or scoring count no view can rasterise is refused before the stage reads its inputs,
+    // naming the setting, and the groom already made stays.
+    const auto groom_time = fs::last_write_time(work / "fur" / "strands.hair");
+    for (const char* too_many : {" --set fur.batch=10000000", " --set fur.score_strands=10000000"}) {
+      const Result refused = run("reconstruct --scene " + scene.string() + " --out " + work.string() + tiny + body + " --set knowledge.preset=cat" +
+                                 small + too_many + " --to fur");
+      INFO(refused.output);
+      CHECK(refused.code == 2);
+      CHECK(refused.output.find(std::string(too_many).substr(7) + ": this device renders at most") != std::string::npos);
+    }
+    CHECK(fs::last_write_time(work / "fur" / "strands.hair") == groom_time);
+  }
   CHECK(fur_summary["views"]["image_weight_mean"].get<double>() == 0.0);
   CHECK(fur_summary["views"]["views_without_image_losses"] == fur_summary["views"]["train"]);
   CHECK(framed.output.find("no photo resolves the fur") != std::string::npos);
