@@ -38,13 +38,17 @@ StrandControls body_color_points(const geometry::Mesh& bald, const geometry::Mes
   return c;
 }
 
+StrandColorOptions body_color_options(StrandColorOptions options) {
+  options.controls = 1;
+  options.hidden_depth = 0.5;  // of two mean edges: M_NeuS's own rasterised depth, not the fur's (fur.color_hidden_depth)
+  return options;
+}
+
 StrandColors color_body(gpu::Context& gpu, const io::Scene& scene, const std::vector<std::uint32_t>& views, const geometry::Mesh& envelope,
                         const geometry::Mesh& bald, StrandColorOptions options) {
   const Stopwatch t;
   const StrandControls points = body_color_points(bald, envelope);
-  options.controls = 1;
-  options.hidden_depth = 0.5;  // of two mean edges: M_NeuS's own rasterised depth, not the fur's (fur.color_hidden_depth)
-  StrandColors out = color_strands(gpu, scene, views, envelope, points, options);
+  StrandColors out = color_strands(gpu, scene, views, envelope, points, body_color_options(options));
   out.report["vertices"] = bald.vertex_count();
   out.report["seconds"] = t.seconds();  // with finding the points on M_NeuS
   return out;

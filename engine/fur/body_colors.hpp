@@ -20,8 +20,12 @@ namespace nf::fur {
 // fur's depth, while a point behind another part of M_NeuS (a far leg) does not.
 StrandControls body_color_points(const geometry::Mesh& bald, const geometry::Mesh& envelope);
 
-// Per vertex of `bald`, linear RGB (vertices x 1 x 3) and whether a view saw it. `options.controls`
-// is taken as 1 and `hidden_depth` as 0.5 (see above). Errors as color_strands.
+// The strand options made the body's: one control, and `hidden_depth` 0.5 (see above).
+StrandColorOptions body_color_options(StrandColorOptions options);
+
+// Per vertex of `bald`, linear RGB (vertices x 1 x 3) and whether a view saw it, on its own pass over
+// the photos (the fur stage colours the body in the groom's pass: color_control_sets). Errors as
+// color_strands.
 StrandColors color_body(gpu::Context& gpu, const io::Scene& scene, const std::vector<std::uint32_t>& views, const geometry::Mesh& envelope,
                         const geometry::Mesh& bald, StrandColorOptions options);
 

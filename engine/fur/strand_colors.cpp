@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <mutex>
 
 #include "engine/core/color.hpp"
@@ -128,80 +129,93 @@ StrandColors read_strand_colors(const std::filesystem::path& file, std::uint64_t
   return c;
 }
 
-StrandColors color_strands(gpu::Context& gpu, const io::Scene& scene, const std::vector<std::uint32_t>& views, const geometry::Mesh& envelope,
-                           const StrandControls& in, const StrandColorOptions& o) {
-  NF_CHECK(o.controls == in.controls && o.outlier_ratio > 1 && in.points.size() == std::size_t(in.strands) * in.controls * 3,
-           "strand colours: controls and options disagree");
-  const Stopwatch clock;
-  const std::size_t n = std::size_t(in.strands) * in.controls;
+namespace {
+
+// One set of controls being coloured: its sums over the views in both passes (header comment).
+class ColorSums {
+ public:
+  ColorSums(const StrandControls& in, const StrandColorOptions& o) : in_(in), o_(o), n_(std::size_t(in.strands) * in.controls) {
+    NF_CHECK(o.controls == in.controls && o.outlier_ratio > 1 && in.points.size() == n_ * 3, "strand colours: controls and options disagree");
+    first_.assign(n_, glm::vec3(0)), second_.assign(n_, glm::vec3(0));
+    first_count_.assign(n_, 0.f), second_count_.assign(n_, 0.f);
+  }
+
+  // Pass 1: the plain mean of each control's observations. Each control is written by the one
+  // thread that owns its strand.
+  void add_first(const ViewData& v) {
+    each_seen(v, [&](std::size_t i, glm::vec3 colour) { first_[i] += colour, first_count_[i] += 1; });
+  }
+  void end_first() {
+    for (std::size_t i = 0; i < n_; ++i)
+      if (first_count_[i] > 0) first_[i] /= first_count_[i];
+  }
+
+  // Pass 2: the view's gain, then the mean of the gained observations near the first estimate.
+  void add_second(const ViewData& v) {
+    // Each chunk's sums, added in the chunks' order: the same gain (and colours.npz) every run.
+    std::vector<std::array<double, 3>> chunks;  // begin, sum, count
+    std::mutex merge;
+    parallel_for(in_.strands, [&](std::size_t begin, std::size_t end) {
+      double local_sum = 0, local_count = 0;
+      glm::vec3 colour;
+      for (std::size_t i = begin * in_.controls; i < end * in_.controls; ++i) {
+        if (!observe(v, &in_.points[3 * i], in_.lengths[i / in_.controls], o_.hidden_depth, colour)) continue;
+        const float seen = color::luminance(colour), expected = color::luminance(first_[i]);
+        if (seen <= 1e-4f || expected <= 1e-4f) continue;
+        local_sum += std::clamp(std::log(double(expected) / seen), -1.0, 1.0), local_count += 1;  // a highlight is not an exposure
+      }
+      const std::lock_guard<std::mutex> lock(merge);
+      chunks.push_back({double(begin), local_sum, local_count});
+    });
+    std::sort(chunks.begin(), chunks.end());
+    double log_sum = 0, count = 0;
+    for (const auto& [begin, sum, n_seen] : chunks) log_sum += sum, count += n_seen;
+    const double gain = count > 0 ? std::exp(log_sum / count) : 1.0;
+    gains_.push_back(gain);
+    each_seen(v, [&](std::size_t i, glm::vec3 colour) {
+      const glm::vec3 gained = colour * float(gain);
+      const float seen = color::luminance(gained), expected = color::luminance(first_[i]);
+      if (seen > expected * o_.outlier_ratio || seen * o_.outlier_ratio < expected) return;
+      second_[i] += gained, second_count_[i] += 1;
+    });
+  }
+
+  // The colours: seen controls, then a seen strand's unseen controls, then unseen strands.
+  StrandColors finish(std::size_t views) const;
+
+ private:
+  void each_seen(const ViewData& v, const std::function<void(std::size_t control, glm::vec3 colour)>& body) const {
+    parallel_for(in_.strands, [&](std::size_t begin, std::size_t end) {
+      glm::vec3 colour;
+      for (std::size_t s = begin; s < end; ++s)
+        for (std::uint32_t c = 0; c < in_.controls; ++c) {
+          const std::size_t i = s * in_.controls + c;
+          if (observe(v, &in_.points[3 * i], in_.lengths[s], o_.hidden_depth, colour)) body(i, colour);
+        }
+    });
+  }
+
+  const StrandControls& in_;
+  const StrandColorOptions o_;
+  const std::size_t n_;
+  std::vector<glm::vec3> first_, second_;
+  std::vector<float> first_count_, second_count_;
+  std::vector<double> gains_;
+};
+
+StrandColors ColorSums::finish(std::size_t views) const {
+  const StrandControls& in = in_;
+  const std::size_t n = n_;
   StrandColors out;
   out.controls = in.controls;
-  // Pass 1: the plain mean of each control's observations. Pass 2: each view's gain, then the mean
-  // of the gained observations near the first estimate.
-  std::vector<glm::vec3> first(n, glm::vec3(0)), second(n, glm::vec3(0));
-  std::vector<float> first_count(n, 0.f), second_count(n, 0.f);
-  std::vector<double> gains;
-  std::mutex merge;
-  Progress progress("strand colours", 2 * views.size());
-  for (int pass = 0; pass < 2; ++pass) {
-    if (pass == 1)
-      for (std::size_t i = 0; i < n; ++i)
-        if (first_count[i] > 0) first[i] /= first_count[i];
-    for (std::size_t vi = 0; vi < views.size(); ++vi) {
-      const ViewData v = load_view(gpu, scene.cameras.at(views[vi]), envelope);
-      const auto each_seen = [&](const std::function<void(std::size_t control, glm::vec3 colour)>& body) {
-        parallel_for(in.strands, [&](std::size_t begin, std::size_t end) {
-          glm::vec3 colour;
-          for (std::size_t s = begin; s < end; ++s)
-            for (std::uint32_t c = 0; c < in.controls; ++c) {
-              const std::size_t i = s * in.controls + c;
-              if (observe(v, &in.points[3 * i], in.lengths[s], o.hidden_depth, colour)) body(i, colour);
-            }
-        });
-      };
-      if (pass == 0) {
-        // Each control is written by the one thread that owns its strand.
-        each_seen([&](std::size_t i, glm::vec3 colour) { first[i] += colour, first_count[i] += 1; });
-      } else {
-        // Each chunk's sums, added in the chunks' order: the same gain (and colours.npz) every run.
-        std::vector<std::array<double, 3>> chunks;  // begin, sum, count
-        parallel_for(in.strands, [&](std::size_t begin, std::size_t end) {
-          double local_sum = 0, local_count = 0;
-          glm::vec3 colour;
-          for (std::size_t i = begin * in.controls; i < end * in.controls; ++i) {
-            if (!observe(v, &in.points[3 * i], in.lengths[i / in.controls], o.hidden_depth, colour)) continue;
-            const float seen = color::luminance(colour), expected = color::luminance(first[i]);
-            if (seen <= 1e-4f || expected <= 1e-4f) continue;
-            local_sum += std::clamp(std::log(double(expected) / seen), -1.0, 1.0), local_count += 1;  // a highlight is not an exposure
-          }
-          const std::lock_guard<std::mutex> lock(merge);
-          chunks.push_back({double(begin), local_sum, local_count});
-        });
-        std::sort(chunks.begin(), chunks.end());
-        double log_sum = 0, count = 0;
-        for (const auto& [begin, sum, n_seen] : chunks) log_sum += sum, count += n_seen;
-        const double gain = count > 0 ? std::exp(log_sum / count) : 1.0;
-        gains.push_back(gain);
-        each_seen([&](std::size_t i, glm::vec3 colour) {
-          const glm::vec3 gained = colour * float(gain);
-          const float seen = color::luminance(gained), expected = color::luminance(first[i]);
-          if (seen > expected * o.outlier_ratio || seen * o.outlier_ratio < expected) return;
-          second[i] += gained, second_count[i] += 1;
-        });
-      }
-      progress.update(pass * views.size() + vi + 1);
-    }
-  }
-  progress.finish();
-
   // Seen controls: the second pass's mean (the first's when every observation was an outlier).
   out.rgb.assign(3 * n, 0.f);
   out.seen.assign(in.strands, 0);
   std::vector<std::uint8_t> control_seen(n, 0);
   std::uint64_t seen_controls = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    if (first_count[i] == 0) continue;
-    const glm::vec3 c = second_count[i] > 0 ? second[i] / second_count[i] : first[i];
+    if (first_count_[i] == 0) continue;
+    const glm::vec3 c = second_count_[i] > 0 ? second_[i] / second_count_[i] : first_[i];
     out.rgb[3 * i] = c.r, out.rgb[3 * i + 1] = c.g, out.rgb[3 * i + 2] = c.b;
     control_seen[i] = 1, out.seen[i / in.controls] = 1, ++seen_controls;
   }
@@ -231,7 +245,7 @@ StrandColors color_strands(gpu::Context& gpu, const io::Scene& scene, const std:
     parallel_for(in.strands, [&](std::size_t begin, std::size_t end) {
       for (std::size_t s = begin; s < end; ++s) {
         if (out.seen[s]) continue;
-        const std::vector<std::uint32_t> near = index.nearest_k(&in.roots[3 * s], o.fill_neighbours);
+        const std::vector<std::uint32_t> near = index.nearest_k(&in.roots[3 * s], o_.fill_neighbours);
         for (std::uint32_t c = 0; c < in.controls; ++c) {
           glm::vec3 sum(0);
           for (std::uint32_t k : near) {
@@ -245,21 +259,53 @@ StrandColors color_strands(gpu::Context& gpu, const io::Scene& scene, const std:
       }
     });
   }
-  double lo = gains.empty() ? 1.0 : *std::min_element(gains.begin(), gains.end());
-  double hi = gains.empty() ? 1.0 : *std::max_element(gains.begin(), gains.end());
-  out.report = {{"views", views.size()},
+  const double lo = gains_.empty() ? 1.0 : *std::min_element(gains_.begin(), gains_.end());
+  const double hi = gains_.empty() ? 1.0 : *std::max_element(gains_.begin(), gains_.end());
+  out.report = {{"views", views},
                 {"controls", in.controls},
                 {"strands_seen", double(seen_ids.size()) / std::max<double>(1, in.strands)},
                 {"controls_seen", double(seen_controls) / std::max<double>(1, double(n))},
                 {"view_gain_min", lo},
-                {"view_gain_max", hi},
-                {"seconds", clock.seconds()}};
+                {"view_gain_max", hi}};
   if (seen_ids.empty() && in.strands > 0) {
     // Nothing to copy from: a neutral grey, said in the report.
     std::fill(out.rgb.begin(), out.rgb.end(), kUnseenGrey);
     out.report["warning"] = "no view sees the fur; every strand is grey";
   }
   return out;
+}
+
+}  // namespace
+
+std::vector<StrandColors> color_control_sets(gpu::Context& gpu, const io::Scene& scene, const std::vector<std::uint32_t>& views,
+                                             const geometry::Mesh& envelope, std::span<const ControlSet> sets) {
+  const Stopwatch clock;
+  std::vector<ColorSums> sums;
+  sums.reserve(sets.size());
+  for (const ControlSet& set : sets) sums.emplace_back(*set.controls, set.options);
+  // Each photo is read, and M_NeuS's depth rasterised, once a pass for every set.
+  Progress progress("strand colours", 2 * views.size());
+  for (int pass = 0; pass < 2; ++pass) {
+    if (pass == 1)
+      for (ColorSums& s : sums) s.end_first();
+    for (std::size_t vi = 0; vi < views.size(); ++vi) {
+      const ViewData v = load_view(gpu, scene.cameras.at(views[vi]), envelope);
+      for (ColorSums& s : sums) pass == 0 ? s.add_first(v) : s.add_second(v);
+      progress.update(pass * views.size() + vi + 1);
+    }
+  }
+  progress.finish();
+  std::vector<StrandColors> out;
+  for (const ColorSums& s : sums) out.push_back(s.finish(views.size()));
+  const double seconds = clock.seconds();  // the pass all the sets shared
+  for (StrandColors& c : out) c.report["seconds"] = seconds;
+  return out;
+}
+
+StrandColors color_strands(gpu::Context& gpu, const io::Scene& scene, const std::vector<std::uint32_t>& views, const geometry::Mesh& envelope,
+                           const StrandControls& strands, const StrandColorOptions& options) {
+  const ControlSet set{&strands, options};
+  return std::move(color_control_sets(gpu, scene, views, envelope, std::span<const ControlSet>(&set, 1)).front());
 }
 
 }  // namespace nf::fur

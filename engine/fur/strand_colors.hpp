@@ -76,4 +76,15 @@ StrandColors read_strand_colors(const std::filesystem::path& file, std::uint64_t
 StrandColors color_strands(gpu::Context& gpu, const io::Scene& scene, const std::vector<std::uint32_t>& views, const geometry::Mesh& envelope,
                            const StrandControls& strands, const StrandColorOptions& options);
 
+// Several sets of controls (the groom's and the body's) in one pass over the photos: each photo is
+// read, and M_NeuS's depth rasterised, twice in all rather than twice per set. Each set keeps its
+// own options and its own exposure gains, so its colours equal color_strands' on it alone; every
+// report's seconds are the shared pass's.
+struct ControlSet {
+  const StrandControls* controls = nullptr;
+  StrandColorOptions options;
+};
+std::vector<StrandColors> color_control_sets(gpu::Context& gpu, const io::Scene& scene, const std::vector<std::uint32_t>& views,
+                                             const geometry::Mesh& envelope, std::span<const ControlSet> sets);
+
 }  // namespace nf::fur

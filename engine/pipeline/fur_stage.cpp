@@ -49,7 +49,7 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 6;  // 2: fur/roots.npz when the groom has roots of its own; 3: selection, length factors; 4: the selection trades held-out orientation against the envelope; 5: strand colours; 6: body colours
+constexpr int kStageVersion = 7;  // 2: fur/roots.npz when the groom has roots of its own; 3: selection, length factors; 4: the selection trades held-out orientation against the envelope; 5: strand colours; 6: body colours; 7: strand and body colours in one pass (metrics.json colors.seconds is the pass)
 
 }  // namespace
 
@@ -499,20 +499,26 @@ json color_groom(StageContext& c, const FurSettings& s, const FurInputs& in, con
   }
   fur::StrandColorOptions o;
   o.controls = s.color_controls, o.hidden_depth = s.color_hidden_depth;
-  const fur::StrandColors colors = fur::color_strands(c.gpu, c.scene, views, *in.envelope, g.controls, o);
-  fur::write_strand_colors(out.colors(), colors);
-  json report = colors.report;
-  log::info("fur: strand colours from ", views.size(), " photos in ", report["seconds"].get<double>(), " s; ",
-            100.0 * report["strands_seen"].get<double>(), " % of the strands seen, the rest filled from their neighbours");
-  // The body's colours (the export's body material), on the M_bald the export reads: defur's, also
-  // when fur.truth=all trained on the true body.
+  // The body's colours (the export's body material) in the same pass over the photos, on the
+  // M_bald the export reads: defur's, also when fur.truth=all trained on the true body.
+  const Stopwatch t_body_points;
   const geometry::Mesh export_body = in.swapped ? io::read_mesh(defur_outputs(c.work).bald()) : geometry::Mesh{};
   const geometry::Mesh& bald = in.swapped ? export_body : in.bald;
-  const fur::StrandColors body = fur::color_body(c.gpu, c.scene, views, *in.envelope, bald, o);
+  const fur::StrandControls body_points = fur::body_color_points(bald, *in.envelope);
+  const double body_points_seconds = t_body_points.seconds();
+  const std::vector<fur::ControlSet> sets{{&g.controls, o}, {&body_points, fur::body_color_options(o)}};
+  const std::vector<fur::StrandColors> made = fur::color_control_sets(c.gpu, c.scene, views, *in.envelope, sets);
+  const fur::StrandColors& colors = made[0];
+  const fur::StrandColors& body = made[1];
+  fur::write_strand_colors(out.colors(), colors);
   fur::write_strand_colors(out.body_colors(), body);
+  json report = colors.report;
   report["body"] = body.report;
-  log::info("fur: body colours for ", bald.vertex_count(), " vertices in ", body.report["seconds"].get<double>(), " s; ",
-            100.0 * body.report["strands_seen"].get<double>(), " % seen");
+  report["body"]["vertices"] = bald.vertex_count();
+  report["body"]["points_seconds"] = body_points_seconds;  // finding each vertex's point on M_NeuS
+  log::info("fur: strand and body colours from ", views.size(), " photos in ", report["seconds"].get<double>(), " s; ",
+            100.0 * report["strands_seen"].get<double>(), " % of the strands seen, the rest filled from their neighbours; ",
+            100.0 * body.report["strands_seen"].get<double>(), " % of the body's ", bald.vertex_count(), " vertices");
   if (gt.colors) {
     const metrics::GroomColors groom{g.controls.roots, colors.seen, [&](std::uint64_t i, float t) { return colors.at(i, t); }, s.color_controls};
     report["ground_truth"] = metrics::color_scores(groom, *gt.colors, s.metric_strands);

@@ -121,6 +121,21 @@ TEST_CASE("strand colours: the true strands coloured from the photos match their
     CHECK(eb["delta_e_unseen"]["mean"].get<double>() < 15.0);
     const std::vector<glm::vec3> flat(furred_rgb.size(), glm::vec3(0.18f));
     CHECK(body_score(flat)["delta_e_seen"]["mean"].get<double>() > eb["delta_e_seen"]["mean"].get<double>() + 5.0);
+
+    // The fur stage colours the strands and the body in one pass over the photos: each set comes
+    // out as it does alone, its own gains included, value for value.
+    const fur::StrandControls body_points = fur::body_color_points(bald, envelope);
+    const std::vector<fur::ControlSet> sets{{&controls, o}, {&body_points, fur::body_color_options(o)}};
+    const std::vector<fur::StrandColors> both = fur::color_control_sets(ctx, scene, views, envelope, sets);
+    REQUIRE(both.size() == 2);
+    CHECK(both[0].rgb == colors.rgb);
+    CHECK(both[0].seen == colors.seen);
+    CHECK(both[0].report["view_gain_min"] == colors.report["view_gain_min"]);
+    CHECK(both[1].rgb == body.rgb);
+    CHECK(both[1].seen == body.seen);
+    CHECK(both[1].report["view_gain_max"] == body.report["view_gain_max"]);
+    CHECK(both[0].report["seconds"] == both[1].report["seconds"]);  // one pass, timed once
+    MESSAGE("one pass " << both[0].report["seconds"] << " s against " << colors.report["seconds"] << " + " << body.report["seconds"] << " s");
   }
   // No view: every strand grey, said in the report.
   const fur::StrandColors none = fur::color_strands(ctx, scene, {}, envelope, controls, o);
