@@ -4,7 +4,6 @@
 
 #include "engine/core/error.hpp"
 #include "engine/core/parallel.hpp"
-#include "engine/core/stopwatch.hpp"
 #include "engine/geometry/surface_locator.hpp"
 
 namespace nf::fur {
@@ -42,16 +41,6 @@ StrandColorOptions body_color_options(StrandColorOptions options) {
   options.controls = 1;
   options.hidden_depth = 0.5;  // of two mean edges: M_NeuS's own rasterised depth, not the fur's (fur.color_hidden_depth)
   return options;
-}
-
-StrandColors color_body(gpu::Context& gpu, const io::Scene& scene, const std::vector<std::uint32_t>& views, const geometry::Mesh& envelope,
-                        const geometry::Mesh& bald, StrandColorOptions options) {
-  const Stopwatch t;
-  const StrandControls points = body_color_points(bald, envelope);
-  StrandColors out = color_strands(gpu, scene, views, envelope, points, body_color_options(options));
-  out.report["vertices"] = bald.vertex_count();
-  out.report["seconds"] = t.seconds();  // with finding the points on M_NeuS
-  return out;
 }
 
 }  // namespace nf::fur

@@ -16,17 +16,13 @@ namespace nf::fur {
 
 // One control per vertex of `bald`: the vertex as the root, the nearest point of `envelope` as the
 // control, and as the "length" two of the envelope's mean edges: the depth test's tolerance (half
-// of it in color_body) is then one mean edge, which a point on M_NeuS itself passes whatever the
+// of it, body_color_options) is then one mean edge, which a point on M_NeuS itself passes whatever the
 // fur's depth, while a point behind another part of M_NeuS (a far leg) does not.
 StrandControls body_color_points(const geometry::Mesh& bald, const geometry::Mesh& envelope);
 
-// The strand options made the body's: one control, and `hidden_depth` 0.5 (see above).
+// The strand options made the body's: one control, and `hidden_depth` 0.5 (see above). The fur
+// stage colours these points in the groom's pass over the photos (color_control_sets), which gives
+// per vertex of `bald` linear RGB (vertices x 1 x 3) and whether a view saw it.
 StrandColorOptions body_color_options(StrandColorOptions options);
-
-// Per vertex of `bald`, linear RGB (vertices x 1 x 3) and whether a view saw it, on its own pass over
-// the photos (the fur stage colours the body in the groom's pass: color_control_sets). Errors as
-// color_strands.
-StrandColors color_body(gpu::Context& gpu, const io::Scene& scene, const std::vector<std::uint32_t>& views, const geometry::Mesh& envelope,
-                        const geometry::Mesh& bald, StrandColorOptions options);
 
 }  // namespace nf::fur

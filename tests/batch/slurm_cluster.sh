@@ -21,6 +21,14 @@ stop() {
     [ -f "$dir/$p.pid" ] && kill -9 "$(cat "$dir/$p.pid")" 2>/dev/null || true
     rm -f "$dir/$p.pid"
   done
+  # Daemons of this folder whose pid file was stale or gone: found by the paths on their command
+  # line. A survivor would write into the next cluster made here (its state, its node name) and
+  # revoke that cluster's job credentials.
+  for pattern in "$conf" "$dir/munge/munge.socket"; do
+    pkill -f -- "$pattern" 2>/dev/null || true
+    for _ in $(seq 50); do pgrep -f -- "$pattern" >/dev/null || break; sleep 0.1; done
+    pkill -9 -f -- "$pattern" 2>/dev/null || true
+  done
 }
 
 if [ "$cmd" = stop ]; then stop; exit 0; fi

@@ -92,7 +92,8 @@ TEST_CASE("strand colours: the true strands coloured from the photos match their
   // the colour of the fur the photos show there (the nearest true strand's tip).
   {
     const geometry::Mesh bald = io::read_mesh(gt.bald());
-    const fur::StrandColors body = fur::color_body(ctx, scene, views, envelope, bald, o);
+    const fur::StrandControls body_points = fur::body_color_points(bald, envelope);
+    const fur::StrandColors body = fur::color_strands(ctx, scene, views, envelope, body_points, fur::body_color_options(o));
     REQUIRE(body.controls == 1);
     REQUIRE(body.rgb.size() == 3 * bald.vertex_count());
     MESSAGE("body: " << body.report.dump());
@@ -124,7 +125,6 @@ TEST_CASE("strand colours: the true strands coloured from the photos match their
 
     // The fur stage colours the strands and the body in one pass over the photos: each set comes
     // out as it does alone, its own gains included, value for value.
-    const fur::StrandControls body_points = fur::body_color_points(bald, envelope);
     const std::vector<fur::ControlSet> sets{{&controls, o}, {&body_points, fur::body_color_options(o)}};
     const std::vector<fur::StrandColors> both = fur::color_control_sets(ctx, scene, views, envelope, sets);
     REQUIRE(both.size() == 2);
