@@ -291,7 +291,7 @@ class Loader {
       if (attributes == p.end() || !attributes->is_object()) fail(attr + " is missing or not an object");
       for (const auto& [key, value] : attributes->items()) number(*attributes, key.c_str(), attr);
       if (mode >= 1 && mode <= 3) continue;  // lines: skipped by the reader
-      for (const char* key : {"POSITION", "NORMAL", "_REGION"})
+      for (const char* key : {"POSITION", "NORMAL", "_REGION", "JOINTS_0", "WEIGHTS_0"})
         if (const auto a = reference(*attributes, key, attr, "accessors", false)) read_accessor(*a, field(attr, key));
       if (const auto a = reference(p, "indices", name, "accessors", false)) read_accessor(*a, name + ".indices");
     }

@@ -82,6 +82,50 @@ struct View {
   double get(std::uint64_t i, unsigned component) const { return load(data + i * stride + component * component_size, type); }
 };
 
+// accessors[i] of `file` for a use (e.g. "meshes[0].primitives[1].attributes.POSITION"); its
+// bufferView is present and in range (gltf_model.cpp), its bytes are checked here.
+View checked_accessor(const tinygltf::Model& model, const std::string& file, int i, const std::string& use, int type,
+                      std::initializer_list<int> components) {
+  const auto fail = [&](const std::string& message) { throw InputError(file + ": " + message); };
+  const tinygltf::Accessor& a = model.accessors[std::size_t(i)];
+  const std::string where = item("accessors", std::uint64_t(i));
+  bool allowed = false;
+  std::string names;
+  for (int c : components) {
+    allowed |= c == a.componentType;
+    names += (names.empty() ? "" : ", ") + component_name(c);
+  }
+  if (!allowed)
+    fail(where + ".componentType " + str(std::uint64_t(a.componentType)) + " (" + component_name(a.componentType) +
+         ") is not read for " + use + " (" + names + ")");
+  if (a.type != type) fail(where + ".type is '" + type_name(a.type) + "', not " + type_name(type) + " (" + use + ")");
+  const std::string view_name = item("bufferViews", std::uint64_t(a.bufferView));
+  const tinygltf::BufferView& bv = model.bufferViews[std::size_t(a.bufferView)];
+  const std::vector<unsigned char>& data = model.buffers[std::size_t(bv.buffer)].data;
+  // gltf_model.cpp checked this against the declared byteLength; here it guards the bytes loaded.
+  if (bv.byteOffset > data.size() || bv.byteLength > data.size() - bv.byteOffset)
+    fail(view_name + ": byteOffset " + str(bv.byteOffset) + " + byteLength " + str(bv.byteLength) + " exceeds buffers[" +
+         str(std::uint64_t(bv.buffer)) + "] (" + str(data.size()) + " bytes)");
+  const auto component_size = std::uint64_t(tinygltf::GetComponentSizeInBytes(std::uint32_t(a.componentType)));
+  const std::uint64_t element_size = component_size * std::uint64_t(tinygltf::GetNumComponentsInType(std::uint32_t(a.type)));
+  const std::uint64_t stride = bv.byteStride ? bv.byteStride : element_size;
+  if (stride < element_size)
+    fail(view_name + ".byteStride " + str(stride) + " is smaller than the " + str(element_size) + "-byte elements of " +
+         where);
+  const std::uint64_t count = a.count, offset = a.byteOffset, length = bv.byteLength;
+  if (count > 0 && (offset > length || element_size > length - offset || count - 1 > (length - offset - element_size) / stride))
+    fail(where + ".count " + str(count) + " exceeds " + view_name + " (byteLength " + str(length) + ", accessor byteOffset " +
+         str(offset) + ", stride " + str(stride) + ", " + str(element_size) + "-byte elements)");
+  View r;
+  r.data = data.data() + bv.byteOffset + (count > 0 ? offset : 0);
+  r.count = count;
+  r.stride = stride;
+  r.type = a.componentType;
+  r.component_size = component_size;
+  r.index = std::uint64_t(i);
+  return r;
+}
+
 class MeshBuilder {
  public:
   MeshBuilder(const tinygltf::Model& model, std::string file) : model_(model), file_(std::move(file)) {}
@@ -107,46 +151,8 @@ class MeshBuilder {
  private:
   [[noreturn]] void fail(const std::string& message) const { throw InputError(file_ + ": " + message); }
 
-  // accessors[i] for a use (e.g. "meshes[0].primitives[1].attributes.POSITION"); its bufferView is
-  // present and in range (gltf_model.cpp), its bytes are checked here.
   View accessor(int i, const std::string& use, int type, std::initializer_list<int> components) const {
-    const tinygltf::Accessor& a = model_.accessors[std::size_t(i)];
-    const std::string where = item("accessors", std::uint64_t(i));
-    bool allowed = false;
-    std::string names;
-    for (int c : components) {
-      allowed |= c == a.componentType;
-      names += (names.empty() ? "" : ", ") + component_name(c);
-    }
-    if (!allowed)
-      fail(where + ".componentType " + str(std::uint64_t(a.componentType)) + " (" + component_name(a.componentType) +
-           ") is not read for " + use + " (" + names + ")");
-    if (a.type != type) fail(where + ".type is '" + type_name(a.type) + "', not " + type_name(type) + " (" + use + ")");
-    const std::string view_name = item("bufferViews", std::uint64_t(a.bufferView));
-    const tinygltf::BufferView& bv = model_.bufferViews[std::size_t(a.bufferView)];
-    const std::vector<unsigned char>& data = model_.buffers[std::size_t(bv.buffer)].data;
-    // gltf_model.cpp checked this against the declared byteLength; here it guards the bytes loaded.
-    if (bv.byteOffset > data.size() || bv.byteLength > data.size() - bv.byteOffset)
-      fail(view_name + ": byteOffset " + str(bv.byteOffset) + " + byteLength " + str(bv.byteLength) + " exceeds buffers[" +
-           str(std::uint64_t(bv.buffer)) + "] (" + str(data.size()) + " bytes)");
-    const auto component_size = std::uint64_t(tinygltf::GetComponentSizeInBytes(std::uint32_t(a.componentType)));
-    const std::uint64_t element_size = component_size * std::uint64_t(tinygltf::GetNumComponentsInType(std::uint32_t(a.type)));
-    const std::uint64_t stride = bv.byteStride ? bv.byteStride : element_size;
-    if (stride < element_size)
-      fail(view_name + ".byteStride " + str(stride) + " is smaller than the " + str(element_size) + "-byte elements of " +
-           where);
-    const std::uint64_t count = a.count, offset = a.byteOffset, length = bv.byteLength;
-    if (count > 0 && (offset > length || element_size > length - offset || count - 1 > (length - offset - element_size) / stride))
-      fail(where + ".count " + str(count) + " exceeds " + view_name + " (byteLength " + str(length) + ", accessor byteOffset " +
-           str(offset) + ", stride " + str(stride) + ", " + str(element_size) + "-byte elements)");
-    View r;
-    r.data = data.data() + bv.byteOffset + (count > 0 ? offset : 0);
-    r.count = count;
-    r.stride = stride;
-    r.type = a.componentType;
-    r.component_size = component_size;
-    r.index = std::uint64_t(i);
-    return r;
+    return checked_accessor(model_, file_, i, use, type, components);
   }
 
   glm::dmat4 local_transform(const tinygltf::Node& node, const std::string& where) const {
@@ -360,25 +366,26 @@ Skeleton read_skeleton_gltf(const std::filesystem::path& path) {
     if (s.parents[j] >= std::int32_t(j)) throw InputError(where + ": joint " + std::to_string(j) + " comes before its parent");
     s.joint_positions.push_back(local[j] + (s.parents[j] < 0 ? glm::vec3(0) : s.joint_positions[std::size_t(s.parents[j])]));
   }
-  for (const tinygltf::Mesh& mesh : model.meshes)
-    for (const tinygltf::Primitive& p : mesh.primitives) {
+  for (std::size_t m = 0; m < model.meshes.size(); ++m)
+    for (std::size_t k = 0; k < model.meshes[m].primitives.size(); ++k) {
+      const tinygltf::Primitive& p = model.meshes[m].primitives[k];
+      if (p.mode >= 1 && p.mode <= 3) continue;  // lines: not read (gltf_model.cpp leaves them unchecked)
       const auto joints = p.attributes.find("JOINTS_0"), weights = p.attributes.find("WEIGHTS_0");
       if (joints == p.attributes.end() || weights == p.attributes.end()) continue;
-      const auto read = [&](int index, int component, auto& out, const char* name) {
-        const tinygltf::Accessor& a = model.accessors[std::size_t(index)];
-        if (a.componentType != component || a.type != TINYGLTF_TYPE_VEC4 || a.bufferView < 0)
-          throw InputError(where + ": " + name + " is not the VEC4 layout nf_gpu writes");
-        const tinygltf::BufferView& v = model.bufferViews[std::size_t(a.bufferView)];
-        const std::size_t bytes = 4 * a.count * sizeof(out[0]);
-        const std::vector<unsigned char>& data = model.buffers[std::size_t(v.buffer)].data;
-        if (v.byteOffset + a.byteOffset + bytes > data.size() || (v.byteStride && v.byteStride != 4 * sizeof(out[0])))
-          throw InputError(where + ": " + name + " lies outside its buffer");
-        out.resize(4 * a.count);
-        std::memcpy(out.data(), data.data() + v.byteOffset + a.byteOffset, bytes);
-      };
-      read(joints->second, kUShort, s.skin_joints, "JOINTS_0");
-      read(weights->second, kFloat, s.skin_weights, "WEIGHTS_0");
-      s.validate(where, s.skin_weights.size() / 4);
+      const std::string attr = item(item("meshes", m) + ".primitives", k) + ".attributes.";
+      const View j = checked_accessor(model, where, joints->second, attr + "JOINTS_0", TINYGLTF_TYPE_VEC4, {kUByte, kUShort});
+      const View w = checked_accessor(model, where, weights->second, attr + "WEIGHTS_0", TINYGLTF_TYPE_VEC4, {kFloat});
+      if (j.count != w.count)
+        throw InputError(where + ": " + attr + "JOINTS_0 has " + str(j.count) + " elements, WEIGHTS_0 " + str(w.count));
+      // Both lie inside their buffers, so the counts are bounded by the file's size.
+      s.skin_joints.resize(kJointInfluences * j.count);
+      s.skin_weights.resize(kJointInfluences * w.count);
+      for (std::uint64_t v = 0; v < j.count; ++v)
+        for (unsigned c = 0; c < kJointInfluences; ++c) {
+          s.skin_joints[kJointInfluences * v + c] = std::uint16_t(j.get(v, c));
+          s.skin_weights[kJointInfluences * v + c] = float(w.get(v, c));
+        }
+      s.validate(where, std::size_t(w.count));
       return s;
     }
   throw InputError(where + ": no primitive has JOINTS_0 and WEIGHTS_0");

@@ -406,6 +406,61 @@ TEST_CASE("malformed glTF / GLB files name the file and the field") {
   fs::remove(path);
 }
 
+TEST_CASE("a rigged glTF's skin is read from u8 or u16 joints, and its accessors are bounds-checked like the mesh's") {
+  // The triangle with a one-joint skin: JOINTS_0 (u16 VEC4) at byte 84, WEIGHTS_0 (f32 VEC4) at 108,
+  // the inverse bind matrix (which tinygltf requires) at 156.
+  Asset a = triangle_asset();
+  a.bin += raw<std::uint16_t>({0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}) + raw<float>({1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0}) +
+           raw<float>({1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, -0.5f, 0, 0, 1});
+  a.doc["meshes"][0]["primitives"][0]["attributes"]["JOINTS_0"] = 3;
+  a.doc["meshes"][0]["primitives"][0]["attributes"]["WEIGHTS_0"] = 4;
+  a.doc["accessors"].push_back({{"bufferView", 3}, {"componentType", 5123}, {"count", 3}, {"type", "VEC4"}});
+  a.doc["accessors"].push_back({{"bufferView", 4}, {"componentType", 5126}, {"count", 3}, {"type", "VEC4"}});
+  a.doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", 84}, {"byteLength", 24}});
+  a.doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", 108}, {"byteLength", 48}});
+  a.doc["accessors"].push_back({{"bufferView", 5}, {"componentType", 5126}, {"count", 1}, {"type", "MAT4"}});
+  a.doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", 156}, {"byteLength", 64}});
+  a.doc["buffers"][0]["byteLength"] = 220;
+  a.doc["nodes"][0]["skin"] = 0;
+  a.doc["nodes"].push_back({{"name", "root"}, {"translation", {0.5, 0, 0}}});
+  a.doc["scenes"][0]["nodes"].push_back(1);
+  a.doc["skins"] = nf::json::array({{{"joints", {1}}, {"inverseBindMatrices", 5}}});
+  const fs::path path = temp("skinned.glb");
+  write_glb(path, a);
+  const Skeleton s = read_skeleton_gltf(path);
+  CHECK(s.joint_names == std::vector<std::string>{"root"});
+  CHECK(s.joint_positions[0] == glm::vec3(0.5f, 0, 0));
+  CHECK(s.skin_joints == std::vector<std::uint16_t>(12, 0));
+  CHECK(s.skin_weights == std::vector<float>{1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0});
+  // u8 joints: the first 12 of the same zero bytes.
+  Asset bytes = a;
+  bytes.doc["accessors"][3]["componentType"] = 5121;
+  write_glb(path, bytes);
+  CHECK(read_skeleton_gltf(path).skin_joints == std::vector<std::uint16_t>(12, 0));
+  auto fails = [&](const Asset& bad, const char* expected) {
+    CAPTURE(expected);
+    write_glb(path, bad);
+    CHECK_THROWS_WITH_AS(read_skeleton_gltf(path), doctest::Contains(expected), InputError);
+  };
+  // A count whose byte size wraps 64 bits once was a std::length_error (found by fuzz_skeleton_gltf).
+  Asset bad = a;
+  bad.doc["accessors"][3]["count"] = std::uint64_t(1) << 62;
+  fails(bad, "accessors[3].count 4611686018427387904 exceeds bufferViews[3]");
+  bad = a;
+  bad.doc["accessors"][4]["count"] = 2;
+  fails(bad, "JOINTS_0 has 3 elements, WEIGHTS_0 2");
+  bad = a;
+  bad.doc["meshes"][0]["primitives"][0]["attributes"]["WEIGHTS_0"] = 9;
+  fails(bad, "attributes.WEIGHTS_0 is 9 but the file has 6 accessors");
+  bad = a;
+  bad.doc["accessors"][4]["componentType"] = 5123;
+  fails(bad, "is not read for meshes[0].primitives[0].attributes.WEIGHTS_0 (FLOAT)");
+  bad = a;
+  bad.doc["bufferViews"][4]["byteStride"] = 8;
+  fails(bad, "byteStride 8 is smaller than the 16-byte elements");
+  fs::remove(path);
+}
+
 TEST_CASE("glTF through tinygltf: images are never decoded, buffers match byteLength, nothing deep or foreign is followed") {
   const fs::path glb_path = temp("lib.glb"), gltf = temp("lib.gltf"), bin = temp("lib.bin");
   Asset a = triangle_asset();
