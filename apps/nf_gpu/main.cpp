@@ -27,6 +27,7 @@
 #include "engine/pipeline/groom_edit.hpp"
 #include "engine/pipeline/groom_pose.hpp"
 #include "engine/pipeline/knowledge_stage.hpp"
+#include "engine/prepare/prepare_scene.hpp"
 #include "engine/synth/preview.hpp"
 #include "engine/orient/scene_orientation.hpp"
 #include "engine/pipeline/stages.hpp"
@@ -161,6 +162,14 @@ int run_synth(const std::string& out, const nf::synth::SynthOptions& options) {
               info["timings"]["total_s"].get<double>(), info["timings"]["body_s"].get<double>(),
               info["timings"]["fur_s"].get<double>(), info["timings"]["envelope_s"].get<double>(),
               info["timings"]["render_s"].get<double>());
+  return 0;
+}
+
+int run_prepare(const nf::prepare::PrepareOptions& options) {
+  const json report = nf::prepare::prepare_scene(options);
+  std::printf("prepare: %zu of %zu photos placed, reprojection error %.2f px, %zu points -> %s (%.1f s)\n",
+              report["placed"].get<std::size_t>(), report["photos"].get<std::size_t>(), report["reprojection_error_px"].get<double>(),
+              report["points"].get<std::size_t>(), options.out.string().c_str(), report["seconds"]["total"].get<double>());
   return 0;
 }
 
@@ -432,6 +441,9 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember(nf::synth::hair_shading_names()));
   synth->add_option("--hair-width", synth_options.hair_width, "strands' rendered width as a multiple of the style's (default 1)")->check(CLI::Range(0.01, 100.0));
   synth->add_option("--noise", synth_options.photo_noise, "Gaussian sensor noise on the photos, sigma in levels of 255 (default 0)")->check(CLI::Range(0.0, 255.0));
+  synth->add_option("--backdrop", synth_options.backdrop,
+                    "what surrounds the animal: plain (one flat colour, default) or textured (a patterned floor and wall, as photos taken anywhere but a studio have)")
+      ->check(CLI::IsMember(nf::synth::backdrop_names()));
   synth->add_option("--out", synth_out, "output folder (must be new, or an earlier synth scene with --overwrite)")->required();
   synth->add_option("--frame", synth_options.frame,
                     "world frame of the files: y-up-m (default) or z-up-mm (z up, millimetres, metres from the origin); the photos are the same")
@@ -439,6 +451,21 @@ int main(int argc, char** argv) {
   synth->add_flag("--overwrite", synth_options.overwrite, "replace an earlier synth scene in --out");
   synth->add_flag("--true-orientation", synth_options.true_orientation,
                   "also write gt/orientation/<camera>.exr: the true on-screen orientation of the strands (nf_gpu orient scores its maps against it)");
+
+  nf::prepare::PrepareOptions prepare_options;
+  std::string prepare_images, prepare_out, prepare_masks, prepare_colmap;
+  double prepare_scale = 0;
+  auto* prepare = app.add_subcommand("prepare", "your own photos to a scene: cameras by COLMAP, the photos and masks undistorted (transforms.json, images/, masks/)");
+  prepare->add_option("--images", prepare_images, "a folder of photos of the animal (PNG or JPEG), 30-80 taken around it")->required();
+  prepare->add_option("--out", prepare_out, "the scene folder to write (must be new)")->required();
+  prepare->add_option("--masks", prepare_masks, "one mask per photo (white animal on black), named like the photo; without it, the photos' alpha channel")
+      ->check(CLI::ExistingDirectory);
+  prepare->add_option("--colmap", prepare_colmap, "a COLMAP sparse model of these photos made elsewhere (cameras/images/points3D .bin or .txt): used instead of running COLMAP")
+      ->check(CLI::ExistingDirectory);
+  prepare->add_option("--scene-scale", prepare_scale, "cm per scene unit, when known (COLMAP's unit is arbitrary; without it the knowledge stage estimates the scale)")
+      ->check(CLI::PositiveNumber);
+  prepare->add_option("--max-features", prepare_options.max_features, "SIFT features per photo (default 4096; matching time grows with its square)")
+      ->check(CLI::Range(256, 65536));
 
   nf::synth::PreviewOptions render_options;
   std::string render_strands, render_mesh, render_scene, render_out;
@@ -580,6 +607,12 @@ int main(int argc, char** argv) {
       return run_metrics(metrics_request, metrics_json);
     }
     if (*synth) return run_synth(synth_out, synth_options);
+    if (*prepare) {
+      prepare_options.images = prepare_images, prepare_options.out = prepare_out;
+      prepare_options.masks = prepare_masks, prepare_options.colmap_model = prepare_colmap;
+      if (prepare_scale > 0) prepare_options.cm_per_unit = prepare_scale;
+      return run_prepare(prepare_options);
+    }
     if (*reconstruct) {
       if (!help_stage.empty()) {
         std::cout << nf::pipeline::describe_stage_settings(help_stage, help_markdown);

@@ -231,7 +231,7 @@ Rendered StrandRenderer::render(const io::Camera& camera) const {
             rh.hit.geomID = RTC_INVALID_GEOMETRY_ID, rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
             rtcIntersect1(m.scene, &context, &rh);
             if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
-              sum += m.options.background;
+              sum += backdrop_color(m.options.backdrop, origin, dir);
               continue;
             }
             ++hits;

@@ -14,6 +14,7 @@
 #include "engine/io/mesh.hpp"
 #include "engine/io/scene.hpp"
 #include "engine/io/strands.hpp"
+#include "engine/synth/backdrop.hpp"
 
 namespace nf::synth {
 
@@ -28,7 +29,7 @@ const std::vector<std::string>& hair_shading_names();
 struct RenderOptions {
   std::uint32_t samples_per_axis = 3;   // s x s stratified samples per pixel
   HairShading shading = HairShading::KajiyaKay;
-  glm::vec3 background{0.05f, 0.05f, 0.06f};  // linear RGB
+  Backdrop backdrop;                    // what rays that miss the animal see
   std::uint32_t render_points = 34;     // points per strand traced (resampled from the strand's own)
   bool true_orientation = false;        // also return Rendered::orientation
 };

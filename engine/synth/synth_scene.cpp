@@ -68,6 +68,7 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
   if (!(o.hair_width > 0 && o.hair_width <= 100)) throw UsageError("synth: --hair-width must lie in (0, 100], got " + std::to_string(o.hair_width));
   if (!(o.photo_noise >= 0 && o.photo_noise <= 255)) throw UsageError("synth: --noise must lie in [0, 255], got " + std::to_string(o.photo_noise));
   hair_shading_from(o.shading);  // an unknown shading fails before any work
+  const bool textured_backdrop = backdrop_is_textured(o.backdrop);
   const WorldFrame frame = world_frame(o.frame);
   // "scenes/cat/" and "scenes/./cat" name the same folder; the temp folder sits beside it.
   fs::path out_dir = fs::absolute(requested_out).lexically_normal();
@@ -146,6 +147,20 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
   render_options.samples_per_axis = o.samples_per_axis;
   render_options.shading = hair_shading_from(o.shading);
   render_options.true_orientation = o.true_orientation;
+  if (textured_backdrop) {
+    // The floor under the lowest paw, the wall well behind the farthest camera, blotches a tenth of
+    // the animal's radius.
+    Backdrop& room = render_options.backdrop;
+    room.textured = true;
+    room.centre = centre;
+    room.floor_y = 1e30f;
+    for (std::size_t i = 0; i < bald.vertex_count(); ++i) room.floor_y = std::min(room.floor_y, bald.positions[3 * i + 1]);
+    float farthest = 0;
+    for (const io::Camera& cam : scene.cameras)
+      farthest = std::max(farthest, glm::length(glm::vec2(float(cam.camera_to_world[3].x) - centre.x, float(cam.camera_to_world[3].z) - centre.z)));
+    room.wall_radius = 2.5f * farthest;
+    room.feature_size = 0.1f * radius;
+  }
   if (o.true_orientation) fs::create_directories(out / "gt" / "orientation");
   const StrandRenderer renderer(bald, body_look, fur.strands, look, render_options);
   timings["render_setup_s"] = clock.lap();
@@ -220,7 +235,7 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
                  {"voxel", envelope.voxel * frame.scale}, {"closing_radius", envelope.closing_radius * frame.scale},
                  {"vertices", envelope.mesh.vertex_count()}}},
       {"render", {{"views", o.views}, {"resolution", o.resolution}, {"samples_per_pixel", o.samples_per_axis * o.samples_per_axis},
-                  {"shading", o.shading}, {"hair_width", o.hair_width}, {"photo_noise", o.photo_noise}, {"true_orientation", o.true_orientation},
+                  {"shading", o.shading}, {"hair_width", o.hair_width}, {"photo_noise", o.photo_noise}, {"backdrop", o.backdrop}, {"true_orientation", o.true_orientation},
                   {"mean_mask_coverage", coverage_sum / (double(o.views) * o.resolution * o.resolution)}}},
   };
   timings["write_s"] = clock.lap();

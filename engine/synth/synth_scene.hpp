@@ -34,6 +34,9 @@ struct SynthOptions {
   std::string shading = "kajiya-kay";
   float hair_width = 1;
   float photo_noise = 0;
+  // What surrounds the animal (backdrop.hpp): "plain" (one flat colour) or "textured" (a patterned
+  // floor and wall, for structure-from-motion and for masks no threshold can make).
+  std::string backdrop = "plain";
   bool overwrite = false;              // replace an existing synth output folder
   // Also write gt/orientation/<camera>.exr: the true on-screen orientation of the strands each pixel
   // shows (strand_renderer.hpp), the reference `nf_gpu orient` judges Gabor maps against.
