@@ -1,0 +1,221 @@
+#include "engine/prepare/prepare_scene.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "engine/core/atomic_file.hpp"
+#include "engine/core/error.hpp"
+#include "engine/core/log.hpp"
+#include "engine/core/output_guard.hpp"
+#include "engine/io/image.hpp"
+#include "engine/io/image_size.hpp"
+#include "engine/io/scene.hpp"
+#include "engine/prepare/colmap_command.hpp"
+
+namespace nf::prepare {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr std::size_t kMinPhotos = 3;
+constexpr std::size_t kExhaustiveLimit = 150;  // beyond it, exhaustive matching's pairs take hours on a laptop
+
+std::string lower(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+bool is_photo(const fs::path& p) {
+  const std::string ext = lower(p.extension().string());
+  return ext == ".png" || ext == ".jpg" || ext == ".jpeg";
+}
+
+// The mask file of a photo in the user's mask folder: <stem>.png, or the photo's own name.
+fs::path mask_file(const fs::path& masks, const fs::path& photo) {
+  for (const fs::path& candidate : {masks / (photo.stem().string() + ".png"), masks / photo.filename(),
+                                    masks / (photo.stem().string() + ".jpg"), masks / (photo.filename().string() + ".png")})
+    if (fs::is_regular_file(candidate)) return candidate;
+  return {};
+}
+
+// Registered images in a COLMAP binary model: images.bin starts with their count (uint64).
+std::uint64_t registered_images(const fs::path& model) {
+  std::ifstream in(model / "images.bin", std::ios::binary);
+  std::uint64_t n = 0;
+  if (!in.read(reinterpret_cast<char*>(&n), sizeof n)) return 0;
+  return n;
+}
+
+// The mean reprojection error and the number of points of a text model's points3D.txt.
+std::pair<double, std::uint64_t> point_statistics(const fs::path& model) {
+  std::ifstream in(model / "points3D.txt");
+  double sum = 0;
+  std::uint64_t n = 0;
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream words(line);
+    double id, x, y, z, r, g, b, error;
+    if (words >> id >> x >> y >> z >> r >> g >> b >> error) sum += error, ++n;
+  }
+  return {n ? sum / double(n) : 0.0, n};
+}
+
+class Steps {
+ public:
+  explicit Steps(json& report) : report_(report) {}
+  void add(const std::string& name, double seconds) {
+    report_["seconds"][name] = seconds;
+    total_ += seconds;
+    report_["seconds"]["total"] = total_;
+  }
+
+ private:
+  json& report_;
+  double total_ = 0;
+};
+
+double since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+json prepare_scene(const PrepareOptions& o) {
+  // Everything the user can get wrong is checked before COLMAP runs for minutes.
+  if (!fs::is_directory(o.images)) throw InputError("prepare: --images " + o.images.string() + " is not a folder");
+  std::vector<fs::path> photos;
+  std::vector<std::string> skipped;
+  for (const fs::directory_entry& e : fs::directory_iterator(o.images)) {
+    if (!e.is_regular_file()) continue;
+    if (is_photo(e.path())) photos.push_back(e.path());
+    else skipped.push_back(e.path().filename().string());
+  }
+  std::sort(photos.begin(), photos.end());
+  std::sort(skipped.begin(), skipped.end());
+  if (!skipped.empty()) log::warn("prepare: ", skipped.size(), " file(s) in ", o.images.string(), " are not PNG or JPEG photos and are left out (", skipped.front(), skipped.size() > 1 ? ", ..." : "", ")");
+  if (photos.size() < kMinPhotos)
+    throw InputError("prepare: " + std::to_string(photos.size()) + " photo(s) in " + o.images.string() +
+                     "; COLMAP needs at least 3 overlapping photos, and a good scene 30-80 taken around the animal");
+  for (const fs::path& p : photos) io::require_complete_image(p);  // truncated photos are named now, not by COLMAP
+
+  std::map<std::string, io::Image> masks;  // by photo name, one channel
+  for (const fs::path& p : photos) {
+    fs::path file = p;
+    if (!o.masks.empty()) {
+      file = mask_file(o.masks, p);
+      if (file.empty()) throw InputError("prepare: no mask for " + p.filename().string() + " in " + o.masks.string() + " (looked for " + p.stem().string() + ".png and " + p.filename().string() + ")");
+    }
+    const io::Image image = io::read_image(file);
+    if (o.masks.empty() && image.channels != 2 && image.channels != 4)
+      throw UsageError("prepare: " + p.string() + " has no alpha channel and no --masks folder was given. Masks made without a hand are not "
+                       "built yet: pass --masks DIR (one mask per photo, white animal on black, named like the photo) or photos cut out with an alpha channel");
+    if (const auto [w, h] = io::image_size(p); image.width != w || image.height != h)
+      throw InputError("prepare: mask " + file.string() + " is " + std::to_string(image.width) + "x" + std::to_string(image.height) + ", its photo " +
+                       std::to_string(w) + "x" + std::to_string(h));
+    const std::vector<std::uint8_t> inside = io::mask_of(image);
+    io::Image m{image.width, image.height, 1, std::vector<float>(inside.begin(), inside.end())};
+    masks[p.filename().string()] = std::move(m);
+  }
+
+  const fs::path out = fs::absolute(o.out).lexically_normal();
+  if (fs::exists(out)) throw UsageError("prepare: --out " + out.string() + " exists; name a new folder (nothing there is replaced)");
+  refuse_output_inside(out, o.images, "--out", "photos");
+  if (!o.masks.empty()) refuse_output_inside(out, o.masks, "--out", "masks");
+  const fs::path work = out.parent_path() / (out.filename().string() + ".partial");
+  fs::remove_all(work);
+  create_output_folder(work / "colmap", "--out");
+  const fs::path log_file = work / "colmap" / "colmap.log";
+
+  json report;
+  report["photos"] = photos.size();
+  report["skipped_files"] = skipped;
+  Steps steps(report);
+  const fs::path database = work / "colmap" / "database.db";
+  fs::path model = o.colmap_model;
+  if (model.empty()) {
+    steps.add("features", run_colmap("feature_extractor", {"--database_path", database.string(), "--image_path", o.images.string(),
+                                                          "--ImageReader.single_camera", "1", "--ImageReader.camera_model", "SIMPLE_RADIAL",
+                                                          "--SiftExtraction.use_gpu", "0", "--SiftExtraction.max_num_features", std::to_string(o.max_features)},
+                                     log_file));
+    const bool exhaustive = photos.size() <= kExhaustiveLimit;
+    report["matching"] = exhaustive ? "exhaustive" : "sequential";
+    steps.add("matching", run_colmap(exhaustive ? "exhaustive_matcher" : "sequential_matcher",
+                                     {"--database_path", database.string(), "--SiftMatching.use_gpu", "0"}, log_file));
+    const fs::path sparse = work / "colmap" / "sparse";
+    fs::create_directories(sparse);
+    steps.add("mapping", run_colmap("mapper", {"--database_path", database.string(), "--image_path", o.images.string(), "--output_path", sparse.string()}, log_file));
+    // COLMAP writes one model per connected group of photos; the largest is the animal.
+    std::uint64_t best = 0;
+    std::size_t models = 0;
+    for (const fs::directory_entry& e : fs::directory_iterator(sparse)) {
+      if (!fs::exists(e.path() / "images.bin")) continue;
+      ++models;
+      if (const std::uint64_t n = registered_images(e.path()); n > best) best = n, model = e.path();
+    }
+    if (model.empty()) throw InputError("prepare: COLMAP placed no cameras (see " + log_file.string() + "): the photos share too few features; take more photos with more overlap, of a textured scene");
+    report["colmap_models"] = models;
+    if (models > 1) log::warn("prepare: COLMAP found ", models, " separate groups of photos; the largest (", best, " photos) is kept");
+  } else if (!fs::exists(model / "images.bin") && !fs::exists(model / "images.txt")) {
+    throw InputError("prepare: --colmap " + model.string() + " holds no COLMAP model (images.bin or images.txt)");
+  }
+
+  // Undistorted pinhole photos and masks: the same undistortion applied to both.
+  const fs::path undistorted = work / "colmap" / "undistorted", mask_input = work / "colmap" / "mask_input",
+                 undistorted_masks = work / "colmap" / "undistorted_masks";
+  auto start = std::chrono::steady_clock::now();
+  fs::create_directories(mask_input);
+  for (const auto& [name, m] : masks) {
+    // Named like its photo (COLMAP finds images by name) with PNG content, which it detects.
+    io::write_png(mask_input / name, m);
+  }
+  report["seconds"]["masks_staged"] = since(start);
+  steps.add("undistort", run_colmap("image_undistorter", {"--image_path", o.images.string(), "--input_path", model.string(), "--output_path", undistorted.string(), "--output_type", "COLMAP"}, log_file));
+  steps.add("undistort_masks", run_colmap("image_undistorter", {"--image_path", mask_input.string(), "--input_path", model.string(), "--output_path", undistorted_masks.string(), "--output_type", "COLMAP"}, log_file));
+  steps.add("model_text", run_colmap("model_converter", {"--input_path", (undistorted / "sparse").string(), "--output_path", undistorted.string(), "--output_type", "TXT"}, log_file));
+
+  start = std::chrono::steady_clock::now();
+  io::Scene scene = io::read_colmap_scene(undistorted);
+  fs::create_directories(work / "images");
+  fs::create_directories(work / "masks");
+  std::vector<std::string> placed;
+  for (io::Camera& c : scene.cameras) {
+    const std::string name = c.image.filename().string();
+    placed.push_back(name);
+    const fs::path image = work / "images" / name;
+    fs::rename(c.image, image);
+    c.image = image;
+    // Resampled masks are soft at the outline: the same 0.5 threshold as every mask nf_gpu reads.
+    const io::Image soft = io::read_image(undistorted_masks / "images" / name);
+    const std::vector<std::uint8_t> inside = io::mask_of(soft);
+    c.mask = work / "masks" / (fs::path(name).stem().string() + ".png");
+    io::write_png(c.mask, io::Image{soft.width, soft.height, 1, std::vector<float>(inside.begin(), inside.end())});
+  }
+  std::vector<std::string> unplaced;
+  for (const fs::path& p : photos)
+    if (std::find(placed.begin(), placed.end(), p.filename().string()) == placed.end()) unplaced.push_back(p.filename().string());
+  report["placed"] = placed.size();
+  report["not_placed"] = unplaced;
+  if (placed.size() < kMinPhotos)
+    throw InputError("prepare: COLMAP placed only " + std::to_string(placed.size()) + " of " + std::to_string(photos.size()) + " photos (see " + log_file.string() + "); take more photos with more overlap");
+  if (!unplaced.empty()) log::warn("prepare: COLMAP could not place ", unplaced.size(), " of ", photos.size(), " photos, left out: ", unplaced.front(), unplaced.size() > 1 ? ", ..." : "", " (all in prepare.json)");
+  const auto [reprojection, points] = point_statistics(undistorted);
+  report["reprojection_error_px"] = reprojection;
+  report["points"] = points;
+  scene.root = work;
+  if (o.cm_per_unit) scene.cm_per_unit = *o.cm_per_unit;
+  report["cm_per_unit"] = o.cm_per_unit ? json(*o.cm_per_unit) : json(nullptr);
+  write_transforms_json(work / "transforms.json", scene);
+  for (const fs::path& scratch : {undistorted, undistorted_masks, mask_input}) fs::remove_all(scratch);
+  steps.add("scene", since(start));
+  write_file_atomic(work / "prepare.json", report.dump(2) + "\n");
+  fs::rename(work, out);
+  return report;
+}
+
+}  // namespace nf::prepare
