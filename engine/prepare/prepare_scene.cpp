@@ -15,7 +15,9 @@
 #include "engine/io/image.hpp"
 #include "engine/io/image_size.hpp"
 #include "engine/io/scene.hpp"
+#include "engine/prepare/auto_masks.hpp"
 #include "engine/prepare/colmap_command.hpp"
+#include "engine/prepare/sparse_points.hpp"
 
 namespace nf::prepare {
 
@@ -80,6 +82,20 @@ class Steps {
   double total_ = 0;
 };
 
+// The photo with its mask's outline in red, to check a mask at a glance.
+void write_outline_preview(const fs::path& file, io::Image photo, const std::vector<std::uint8_t>& inside) {
+  const std::uint32_t w = photo.width, h = photo.height;
+  io::Image rgb{w, h, 3, std::vector<float>(std::size_t(w) * h * 3)};
+  for (std::uint32_t y = 0; y < h; ++y)
+    for (std::uint32_t x = 0; x < w; ++x) {
+      const std::size_t k = std::size_t(y) * w + x;
+      const bool edge = (x > 0 && inside[k - 1] != inside[k]) || (y > 0 && inside[k - w] != inside[k]);
+      for (std::uint32_t c = 0; c < 3; ++c)
+        rgb.pixels[3 * k + c] = edge ? (c == 0 ? 1.f : 0.f) : photo.at(x, y, std::min(c, photo.channels - 1));
+    }
+  write_file_atomic(file, io::encode_jpeg(rgb, 90));
+}
+
 double since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -104,17 +120,19 @@ json prepare_scene(const PrepareOptions& o) {
                      "; COLMAP needs at least 3 overlapping photos, and a good scene 30-80 taken around the animal");
   for (const fs::path& p : photos) io::require_complete_image(p);  // truncated photos are named now, not by COLMAP
 
+  // Masks: the user's, the photos' alpha, or (when a photo has neither) made here once the cameras are known.
+  const bool automatic = o.masks.empty() && std::any_of(photos.begin(), photos.end(), [](const fs::path& p) {
+    const std::uint32_t channels = io::image_channels(p);
+    return channels != 2 && channels != 4;
+  });
   std::map<std::string, io::Image> masks;  // by photo name, one channel
-  for (const fs::path& p : photos) {
+  for (const fs::path& p : automatic ? std::vector<fs::path>() : photos) {
     fs::path file = p;
     if (!o.masks.empty()) {
       file = mask_file(o.masks, p);
       if (file.empty()) throw InputError("prepare: no mask for " + p.filename().string() + " in " + o.masks.string() + " (looked for " + p.stem().string() + ".png and " + p.filename().string() + ")");
     }
     const io::Image image = io::read_image(file);
-    if (o.masks.empty() && image.channels != 2 && image.channels != 4)
-      throw UsageError("prepare: " + p.string() + " has no alpha channel and no --masks folder was given. Masks made without a hand are not "
-                       "built yet: pass --masks DIR (one mask per photo, white animal on black, named like the photo) or photos cut out with an alpha channel");
     if (const auto [w, h] = io::image_size(p); image.width != w || image.height != h)
       throw InputError("prepare: mask " + file.string() + " is " + std::to_string(image.width) + "x" + std::to_string(image.height) + ", its photo " +
                        std::to_string(w) + "x" + std::to_string(h));
@@ -135,6 +153,7 @@ json prepare_scene(const PrepareOptions& o) {
   json report;
   report["photos"] = photos.size();
   report["skipped_files"] = skipped;
+  report["masks"] = automatic ? "automatic" : o.masks.empty() ? "alpha" : "given";
   Steps steps(report);
   const fs::path database = work / "colmap" / "database.db";
   fs::path model = o.colmap_model;
@@ -174,27 +193,38 @@ json prepare_scene(const PrepareOptions& o) {
     // Named like its photo (COLMAP finds images by name) with PNG content, which it detects.
     io::write_png(mask_input / name, m);
   }
-  report["seconds"]["masks_staged"] = since(start);
+  if (!automatic) steps.add("masks_staged", since(start));
   steps.add("undistort", run_colmap("image_undistorter", {"--image_path", o.images.string(), "--input_path", model.string(), "--output_path", undistorted.string(), "--output_type", "COLMAP"}, log_file));
-  steps.add("undistort_masks", run_colmap("image_undistorter", {"--image_path", mask_input.string(), "--input_path", model.string(), "--output_path", undistorted_masks.string(), "--output_type", "COLMAP"}, log_file));
+  if (!automatic)
+    steps.add("undistort_masks", run_colmap("image_undistorter", {"--image_path", mask_input.string(), "--input_path", model.string(), "--output_path", undistorted_masks.string(), "--output_type", "COLMAP"}, log_file));
   steps.add("model_text", run_colmap("model_converter", {"--input_path", (undistorted / "sparse").string(), "--output_path", undistorted.string(), "--output_type", "TXT"}, log_file));
 
   start = std::chrono::steady_clock::now();
   io::Scene scene = io::read_colmap_scene(undistorted);
+  std::vector<std::vector<std::uint8_t>> made;
+  if (automatic) {
+    AutoMasks found = automatic_masks(scene, read_sparse_points(undistorted));
+    made = std::move(found.masks);
+    report["automatic_masks"] = std::move(found.report);
+    steps.add("automatic_masks", report["automatic_masks"]["seconds"].get<double>());
+    start = std::chrono::steady_clock::now();
+  }
   fs::create_directories(work / "images");
   fs::create_directories(work / "masks");
   std::vector<std::string> placed;
-  for (io::Camera& c : scene.cameras) {
+  fs::create_directories(work / "previews");
+  for (std::size_t i = 0; i < scene.cameras.size(); ++i) {
+    io::Camera& c = scene.cameras[i];
     const std::string name = c.image.filename().string();
     placed.push_back(name);
     const fs::path image = work / "images" / name;
     fs::rename(c.image, image);
     c.image = image;
     // Resampled masks are soft at the outline: the same 0.5 threshold as every mask nf_gpu reads.
-    const io::Image soft = io::read_image(undistorted_masks / "images" / name);
-    const std::vector<std::uint8_t> inside = io::mask_of(soft);
+    const std::vector<std::uint8_t> inside = automatic ? std::move(made[i]) : io::mask_of(io::read_image(undistorted_masks / "images" / name));
     c.mask = work / "masks" / (fs::path(name).stem().string() + ".png");
-    io::write_png(c.mask, io::Image{soft.width, soft.height, 1, std::vector<float>(inside.begin(), inside.end())});
+    io::write_png(c.mask, io::Image{c.width, c.height, 1, std::vector<float>(inside.begin(), inside.end())});
+    write_outline_preview(work / "previews" / (fs::path(name).stem().string() + ".jpg"), io::read_image(image), inside);
   }
   std::vector<std::string> unplaced;
   for (const fs::path& p : photos)

@@ -1,0 +1,306 @@
+#include "engine/prepare/auto_masks.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <random>
+#include <string>
+
+#include <opencv2/imgproc.hpp>
+
+#include "engine/core/error.hpp"
+#include "engine/core/log.hpp"
+#include "engine/core/parallel.hpp"
+#include "engine/io/image.hpp"
+#include "engine/prepare/floor_consistency.hpp"
+
+namespace nf::prepare {
+
+namespace {
+
+// The point nearest every camera's viewing axis (least squares): where the photographer aimed.
+glm::dvec3 common_focus(const std::vector<io::Camera>& cameras) {
+  glm::dmat3 a(0.0);
+  glm::dvec3 b(0.0);
+  for (const io::Camera& c : cameras) {
+    const glm::dvec3 d = -glm::normalize(glm::dvec3(c.camera_to_world[2]));
+    const glm::dmat3 across = glm::dmat3(1.0) - glm::outerProduct(d, d);
+    a += across, b += across * c.centre();
+  }
+  if (std::abs(glm::determinant(a)) < 1e-12) throw InputError("prepare: the cameras' axes are parallel; the photos must be taken around the animal");
+  return glm::inverse(a) * b;
+}
+
+struct Plane {
+  FloorPlane plane;
+  std::size_t inliers = 0;
+};
+
+// The plane most points lie on within `tolerance` (RANSAC, seeded: the same photos give the same floor).
+Plane dominant_plane(const std::vector<glm::dvec3>& points, double tolerance) {
+  Plane best;
+  if (points.size() < 3) return best;
+  std::mt19937 rng(1);
+  std::uniform_int_distribution<std::size_t> pick(0, points.size() - 1);
+  for (int trial = 0; trial < 800; ++trial) {
+    const glm::dvec3 a = points[pick(rng)], b = points[pick(rng)], c = points[pick(rng)];
+    const glm::dvec3 n = glm::cross(b - a, c - a);
+    if (glm::length(n) < 1e-12) continue;
+    Plane p{{a, glm::normalize(n)}, 0};
+    for (const glm::dvec3& q : points) p.inliers += std::abs(p.plane.height(q)) < tolerance;
+    if (p.inliers > best.inliers) best = p;
+  }
+  return best;
+}
+
+cv::Mat photo_bgr(const io::Camera& camera) {
+  const io::Image image = io::read_image(camera.image);
+  cv::Mat bgr(int(image.height), int(image.width), CV_8UC3);
+  for (std::uint32_t y = 0; y < image.height; ++y)
+    for (std::uint32_t x = 0; x < image.width; ++x) {
+      cv::Vec3b& px = bgr.at<cv::Vec3b>(int(y), int(x));
+      for (int c = 0; c < 3; ++c) {
+        const float v = image.at(x, y, std::min<std::uint32_t>(std::uint32_t(c), image.channels - 1));
+        px[2 - c] = std::uint8_t(std::clamp(v, 0.f, 1.f) * 255.f + 0.5f);
+      }
+    }
+  return bgr;
+}
+
+std::vector<cv::Point> projected(const io::Camera& camera, const std::vector<glm::dvec3>& world) {
+  std::vector<cv::Point> r;
+  for (const glm::dvec3& p : world)
+    if (const glm::dvec3 q = camera.project(p); q.z > 0) r.emplace_back(int(std::lround(q.x)), int(std::lround(q.y)));
+  return r;
+}
+
+cv::Mat foreground(const cv::Mat& labels) { return (labels == cv::GC_FGD) | (labels == cv::GC_PR_FGD); }
+
+// GrabCut on the labels, in place. It needs pixels of both kinds to model their colours: with no
+// animal left to cut, the view has none.
+void graph_cut(const cv::Mat& photo, cv::Mat& labels, std::uint32_t iterations, const std::string& view) {
+  if (cv::countNonZero(foreground(labels)) == 0) return;
+  if (cv::countNonZero(foreground(labels)) == int(labels.total())) labels.setTo(cv::Scalar(cv::GC_PR_BGD));
+  try {
+    cv::Mat bgd, fgd;
+    cv::grabCut(photo, labels, cv::Rect(), bgd, fgd, int(iterations), cv::GC_INIT_WITH_MASK);
+  } catch (const cv::Exception& e) {
+    throw InputError("prepare: the automatic mask of view " + view + " failed (" + e.what() + "); pass --masks DIR");
+  }
+}
+
+}  // namespace
+
+AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, const AutoMaskOptions& o) {
+  const auto start = std::chrono::steady_clock::now();
+  AutoMasks out;
+  json& report = out.report;
+  const glm::dvec3 focus = common_focus(scene.cameras);
+  std::vector<double> distances;
+  glm::dvec3 camera_mean(0.0);
+  for (const io::Camera& c : scene.cameras) distances.push_back(glm::distance(c.centre(), focus)), camera_mean += c.centre();
+  camera_mean /= double(scene.cameras.size());
+  std::nth_element(distances.begin(), distances.begin() + std::ptrdiff_t(distances.size() / 2), distances.end());
+  const double reach = distances[distances.size() / 2];  // the cameras' median distance: the scene's scale
+
+  // The floor: the dominant plane among the points within reach of the centre (a far wall is left out).
+  std::vector<glm::dvec3> near;
+  for (const glm::dvec3& p : points.positions)
+    if (glm::distance(p, focus) < 1.5 * reach) near.push_back(p);
+  const double tolerance = 0.005 * reach;
+  const Plane found = dominant_plane(near, tolerance);
+  FloorPlane floor = found.plane;
+  const bool has_floor = found.inliers >= std::max<std::size_t>(30, near.size() / 10);
+  if (floor.height(camera_mean) < 0) floor.normal = -floor.normal;
+  // Animal points stand above the floor, near the centre; floor points and far ones are background.
+  std::vector<char> animal(points.positions.size(), 0), background(points.positions.size(), 0);
+  std::vector<glm::dvec3> animal_points;
+  for (std::size_t i = 0; i < points.positions.size(); ++i) {
+    const glm::dvec3& p = points.positions[i];
+    const double h = has_floor ? floor.height(p) : 1.0, d = glm::distance(p, focus);
+    if (h > 3 * tolerance && d < 0.6 * reach) animal[i] = 1, animal_points.push_back(p);
+    else if (std::abs(h) < tolerance || d > 0.8 * reach || h < -3 * tolerance) background[i] = 1;
+  }
+  report["focus"] = {focus.x, focus.y, focus.z};
+  report["camera_distance"] = reach;
+  report["floor_found"] = has_floor;
+  report["floor_points"] = found.inliers;
+  report["animal_points"] = animal_points.size();
+  if (animal_points.size() < 20)
+    throw InputError("prepare: only " + std::to_string(animal_points.size()) + " sparse points stand above the floor near where the cameras aim, too few to say "
+                     "where the animal is; pass --masks DIR (one mask per photo) or take the photos closer, around the animal");
+  if (!has_floor) log::warn("prepare: no floor found among the sparse points; the automatic masks rely on the animal's distance from the cameras alone");
+
+  // The animal's box in the floor's frame, generous: sparse points on fur are few and cluster on the
+  // body, while the head, tail and legs reach farther. Down to the floor (the paws stand on it).
+  glm::dvec3 u = glm::normalize(glm::cross(floor.normal, std::abs(floor.normal.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
+  const glm::dvec3 v = glm::cross(floor.normal, u), n = floor.normal;
+  const glm::dvec3 base = focus - floor.height(focus) * n;  // the centre's foot on the floor
+  double horizontal = 0, top = 0;
+  for (const glm::dvec3& p : animal_points) {
+    const glm::dvec3 d = p - base;
+    horizontal = std::max(horizontal, glm::length(d - glm::dot(d, n) * n));
+    top = std::max(top, glm::dot(d, n));
+  }
+  horizontal = std::clamp(1.6 * horizontal, 0.3 * reach, 0.6 * reach);
+  top = std::min(1.5 * top, 0.8 * reach);
+  glm::dvec3 lo(-horizontal, -horizontal, has_floor ? 0.0 : -top), hi(horizontal, horizontal, top);
+  const FloorPlane box_frame{base, n};
+  const auto world = [&](const glm::dvec3& local) { return box_frame.point + local.x * u + local.y * v + local.z * n; };
+  std::vector<glm::dvec3> corners;
+  for (int k = 0; k < 8; ++k) corners.push_back(world({k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z}));
+
+  const std::size_t views = scene.cameras.size();
+  std::vector<cv::Mat> photos(views), labels(views), cut(views);
+  std::vector<cv::Mat> hull_masks(views);
+  std::vector<cv::Mat> grey(views);
+  std::vector<int> floor_pixels(views, 0), off_floor_pixels(views, 0);
+  parallel_for(views, [&](std::size_t i0, std::size_t i1) {
+    for (std::size_t i = i0; i < i1; ++i) {
+      photos[i] = photo_bgr(scene.cameras[i]);
+      cv::Mat g;
+      cv::cvtColor(photos[i], g, cv::COLOR_BGR2GRAY);
+      g.convertTo(grey[i], CV_32F);
+    }
+  });
+  const auto first_cut = [&](std::size_t i) {
+    const io::Camera& c = scene.cameras[i];
+    cv::Mat& l = labels[i];
+    l = cv::Mat(int(c.height), int(c.width), CV_8U, cv::Scalar(cv::GC_BGD));
+    std::vector<cv::Point> box = projected(c, corners), hull;
+    if (box.size() == 8) {
+      cv::convexHull(box, hull);
+      cv::fillConvexPoly(l, hull, cv::Scalar(cv::GC_PR_BGD));
+    } else {
+      l.setTo(cv::Scalar(cv::GC_PR_BGD));  // the camera is inside the box: no bound
+    }
+    if (std::vector<cv::Point> inside = projected(c, animal_points); inside.size() >= 3) {
+      cv::convexHull(inside, hull);
+      cv::fillConvexPoly(l, hull, cv::Scalar(cv::GC_PR_FGD));
+    }
+    if (has_floor) {
+      // What the other views say of the floor inside the box: floor is background, pixels that no
+      // view sees on the floor stand above it (legs and paws, whose sparse points are few).
+      const cv::Rect region = box.size() == 8 ? cv::boundingRect(box) : cv::Rect(0, 0, l.cols, l.rows);
+      const cv::Mat evidence = floor_evidence(scene.cameras, grey, i, floor, base, 1.5 * horizontal, region);
+      // Off-floor pixels in a solid patch are certain; lone ones only likely.
+      cv::Mat off = evidence == kOffFloor, solid;
+      cv::erode(off, solid, cv::Mat());
+      l.setTo(cv::Scalar(cv::GC_PR_FGD), off & (l != cv::GC_BGD));
+      l.setTo(cv::Scalar(cv::GC_FGD), solid & (l != cv::GC_BGD));
+      // Floor is certain away from the animal; next to it (where paws stand, their floor point
+      // all but their own) it is only likely, and the colours decide.
+      const int near_px = std::max(3, int(std::lround(0.02 * std::max(l.cols, l.rows))));
+      cv::Mat near_animal;
+      cv::dilate(off, near_animal, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * near_px + 1, 2 * near_px + 1)));
+      l.setTo(cv::Scalar(cv::GC_BGD), (evidence == kFloor) & (near_animal == 0));
+      l.setTo(cv::Scalar(cv::GC_PR_BGD), (evidence == kFloor) & near_animal);
+      floor_pixels[i] = cv::countNonZero(evidence == kFloor), off_floor_pixels[i] = cv::countNonZero(evidence == kOffFloor);
+    }
+    const auto seen = points.observed.find(c.image.filename().string());
+    if (seen != points.observed.end())
+      for (const Observation& ob : seen->second) {
+        const cv::Point at(int(std::lround(ob.pixel.x)), int(std::lround(ob.pixel.y)));
+        if (animal[ob.point]) cv::circle(l, at, 2, cv::Scalar(cv::GC_FGD), cv::FILLED);
+        else if (background[ob.point]) cv::circle(l, at, 2, cv::Scalar(cv::GC_BGD), cv::FILLED);
+      }
+    graph_cut(photos[i], l, o.grabcut_iterations, c.name);
+    cut[i] = foreground(l);
+  };
+
+  // The visual hull of the cuts: voxels of the box that the views in whose frame they lie see inside
+  // their cuts, all but a fifth (a few wrong cuts must not carve the others); drawn back into each
+  // view as discs of the voxel's size.
+  const double side = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) / double(o.hull_cells);
+  const glm::uvec3 cells(glm::max(glm::dvec3(1.0), glm::ceil((hi - lo) / side)));
+  const auto carve = [&] {
+    const std::size_t total = std::size_t(cells.x) * cells.y * cells.z;
+    std::vector<char> kept(total, 0);
+    parallel_for(total, [&](std::size_t k0, std::size_t k1) {
+      for (std::size_t k = k0; k < k1; ++k) {
+        const glm::dvec3 local = lo + side * (glm::dvec3(double(k % cells.x), double((k / cells.x) % cells.y), double(k / (std::size_t(cells.x) * cells.y))) + 0.5);
+        const glm::dvec3 p = world(local);
+        std::size_t misses = 0, seen = 0;
+        for (std::size_t i = 0; i < views; ++i) {
+          const glm::dvec3 q = scene.cameras[i].project(p);
+          if (q.z <= 0 || q.x < 0 || q.y < 0 || q.x >= cut[i].cols || q.y >= cut[i].rows) continue;
+          ++seen;
+          misses += cut[i].at<std::uint8_t>(int(q.y), int(q.x)) == 0;
+        }
+        kept[k] = seen >= 3 && misses <= std::max<std::size_t>(1, seen / 5);
+      }
+    });
+    std::vector<glm::dvec3> voxels;
+    for (std::size_t k = 0; k < total; ++k)
+      if (kept[k])
+        voxels.push_back(world(lo + side * (glm::dvec3(double(k % cells.x), double((k / cells.x) % cells.y), double(k / (std::size_t(cells.x) * cells.y))) + 0.5)));
+    parallel_for(views, [&](std::size_t i0, std::size_t i1) {
+      for (std::size_t i = i0; i < i1; ++i) {
+        const io::Camera& c = scene.cameras[i];
+        hull_masks[i] = cv::Mat::zeros(int(c.height), int(c.width), CV_8U);
+        for (const glm::dvec3& p : voxels)
+          if (const glm::dvec3 q = c.project(p); q.z > 0) {
+            const int radius = std::max(1, int(std::ceil(0.8 * side * c.fx / q.z)));
+            cv::circle(hull_masks[i], cv::Point(int(q.x), int(q.y)), radius, cv::Scalar(255), cv::FILLED);
+          }
+      }
+    });
+    return voxels.size();
+  };
+  const auto hull_cut = [&](std::size_t i) {
+    // Outside the (slightly grown) hull is background, well inside it and cut as animal is animal,
+    // the band between is the graph cut's to decide.
+    const int grow = std::max(2, int(std::lround(0.004 * std::max(photos[i].cols, photos[i].rows))));
+    const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * grow + 1, 2 * grow + 1));
+    cv::Mat grown, far, shrunk;
+    cv::dilate(hull_masks[i], grown, kernel);
+    cv::dilate(hull_masks[i], far, kernel, cv::Point(-1, -1), 4);
+    cv::erode(hull_masks[i], shrunk, kernel, cv::Point(-1, -1), 2);
+    cv::Mat& l = labels[i];
+    // What the first cut was sure of stays; the hull moves the rest.
+    l.setTo(cv::Scalar(cv::GC_PR_BGD), (l == cv::GC_PR_FGD) | (l == cv::GC_PR_BGD));
+    l.setTo(cv::Scalar(cv::GC_PR_FGD), (grown & cut[i]) & (l != cv::GC_BGD) & (l != cv::GC_FGD));
+    l.setTo(cv::Scalar(cv::GC_FGD), shrunk & cut[i]);
+    l.setTo(cv::Scalar(cv::GC_BGD), far == 0);
+    graph_cut(photos[i], l, o.grabcut_iterations, scene.cameras[i].name);
+    cut[i] = foreground(l);
+  };
+
+  // Each photo's cut is independent of the others': one per core.
+  const auto each_view = [&](const auto& body) {
+    parallel_for(views, [&](std::size_t i0, std::size_t i1) {
+      for (std::size_t i = i0; i < i1; ++i) body(i);
+    });
+  };
+  each_view(first_cut);
+  std::size_t voxels = 0;
+  for (std::uint32_t round = 1; round < o.rounds; ++round) {
+    voxels = carve();
+    if (voxels == 0) throw InputError("prepare: the automatic masks share no volume across the views (the cameras or the photos disagree); pass --masks DIR");
+    each_view(hull_cut);
+  }
+  voxels = carve();
+  report["hull_voxels"] = voxels;
+  report["hull_voxel_size"] = side;
+  json per_view = json::array();
+  std::vector<std::string> flagged;
+  for (std::size_t i = 0; i < views; ++i) {
+    const io::Camera& c = scene.cameras[i];
+    const double both = double(cv::countNonZero(cut[i] & hull_masks[i])), either = double(cv::countNonZero(cut[i] | hull_masks[i]));
+    const double agreement = either > 0 ? both / either : 0.0;
+    per_view.push_back({{"view", c.name}, {"animal_share", double(cv::countNonZero(cut[i])) / double(cut[i].total())}, {"hull_iou", agreement},
+                        {"floor_pixels", floor_pixels[i]}, {"off_floor_pixels", off_floor_pixels[i]}});
+    if (agreement < 0.9) flagged.push_back(c.name);
+    std::vector<std::uint8_t> mask(std::size_t(c.width) * c.height);
+    for (std::uint32_t y = 0; y < c.height; ++y)
+      for (std::uint32_t x = 0; x < c.width; ++x) mask[std::size_t(y) * c.width + x] = cut[i].at<std::uint8_t>(int(y), int(x)) ? 1 : 0;
+    out.masks.push_back(std::move(mask));
+  }
+  report["views"] = per_view;
+  report["disagreeing_views"] = flagged;
+  if (!flagged.empty()) log::warn("prepare: ", flagged.size(), " automatic mask(s) disagree with the other views' hull (IoU below 0.9): ", flagged.front(), flagged.size() > 1 ? ", ..." : "", "; check them in previews/");
+  report["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+}  // namespace nf::prepare

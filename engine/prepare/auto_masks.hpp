@@ -1,0 +1,35 @@
+#pragma once
+// Masks made without a hand, for photos whose cameras COLMAP found. The animal is what every camera
+// looks at: the point nearest all the cameras' axes is its centre, the floor is the plane most sparse
+// points lie on, and the points that stand above the floor near the centre are the animal (the rest,
+// floor and far surroundings, are background). Each photo is segmented by a graph cut on colour
+// (OpenCV's GrabCut), bounded by the animal's box and seeded by where that photo observed animal and
+// background points and by what the other photos say of its floor (floor_consistency.hpp: the legs
+// and the body seen against the floor stand out, the floor and shadows on it agree); then the masks
+// are made to agree across views: a visual hull is carved from them, projected back, and each photo
+// is cut again inside it.
+#include <cstdint>
+#include <vector>
+
+#include "engine/core/json.hpp"
+#include "engine/io/scene.hpp"
+#include "engine/prepare/sparse_points.hpp"
+
+namespace nf::prepare {
+
+struct AutoMaskOptions {
+  std::uint32_t rounds = 2;             // cuts per photo: the first alone, then each inside the hull of the last
+  std::uint32_t hull_cells = 160;       // the visual hull's voxels along the animal box's longest side
+  std::uint32_t grabcut_iterations = 5;
+};
+
+struct AutoMasks {
+  std::vector<std::vector<std::uint8_t>> masks;  // per camera of the scene, width x height, 1 = animal
+  json report;  // the centre, floor and animal points found, and per view its share of animal and its agreement with the hull
+};
+
+// The scene's cameras must be undistorted pinholes with their photos; `points` from the same model.
+// Throws InputError when too few sparse points stand above the floor to say where the animal is.
+AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, const AutoMaskOptions& options = {});
+
+}  // namespace nf::prepare
