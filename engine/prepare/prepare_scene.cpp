@@ -96,6 +96,24 @@ void write_outline_preview(const fs::path& file, io::Image photo, const std::vec
   write_file_atomic(file, io::encode_jpeg(rgb, 90));
 }
 
+// cameras.txt's cameras: model, size and parameters (focal lengths, principal point, distortion).
+json camera_lines(const fs::path& file) {
+  json cameras = json::array();
+  std::ifstream in(file);
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream words(line);
+    long long id;
+    std::string model;
+    std::uint64_t width = 0, height = 0;
+    words >> id >> model >> width >> height;
+    std::vector<double> params;
+    for (double x; words >> x;) params.push_back(x);
+    cameras.push_back({{"model", model}, {"width", width}, {"height", height}, {"params", params}});
+  }
+  return cameras;
+}
+
 double since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -198,6 +216,12 @@ json prepare_scene(const PrepareOptions& o) {
   if (!automatic)
     steps.add("undistort_masks", run_colmap("image_undistorter", {"--image_path", mask_input.string(), "--input_path", model.string(), "--output_path", undistorted_masks.string(), "--output_type", "COLMAP"}, log_file));
   steps.add("model_text", run_colmap("model_converter", {"--input_path", (undistorted / "sparse").string(), "--output_path", undistorted.string(), "--output_type", "TXT"}, log_file));
+  // The lens COLMAP found (before undistortion): the user's check that the focal length is sane.
+  const fs::path lens = work / "colmap" / "lens";
+  fs::create_directories(lens);
+  steps.add("lens", run_colmap("model_converter", {"--input_path", model.string(), "--output_path", lens.string(), "--output_type", "TXT"}, log_file));
+  report["cameras"] = camera_lines(lens / "cameras.txt");
+  fs::remove_all(lens);
 
   start = std::chrono::steady_clock::now();
   io::Scene scene = io::read_colmap_scene(undistorted);
