@@ -18,41 +18,6 @@ namespace nf::prepare {
 
 namespace {
 
-// The point nearest every camera's viewing axis (least squares): where the photographer aimed.
-glm::dvec3 common_focus(const std::vector<io::Camera>& cameras) {
-  glm::dmat3 a(0.0);
-  glm::dvec3 b(0.0);
-  for (const io::Camera& c : cameras) {
-    const glm::dvec3 d = -glm::normalize(glm::dvec3(c.camera_to_world[2]));
-    const glm::dmat3 across = glm::dmat3(1.0) - glm::outerProduct(d, d);
-    a += across, b += across * c.centre();
-  }
-  if (std::abs(glm::determinant(a)) < 1e-12) throw InputError("prepare: the cameras' axes are parallel; the photos must be taken around the animal");
-  return glm::inverse(a) * b;
-}
-
-struct Plane {
-  FloorPlane plane;
-  std::size_t inliers = 0;
-};
-
-// The plane most points lie on within `tolerance` (RANSAC, seeded: the same photos give the same floor).
-Plane dominant_plane(const std::vector<glm::dvec3>& points, double tolerance) {
-  Plane best;
-  if (points.size() < 3) return best;
-  std::mt19937 rng(1);
-  std::uniform_int_distribution<std::size_t> pick(0, points.size() - 1);
-  for (int trial = 0; trial < 800; ++trial) {
-    const glm::dvec3 a = points[pick(rng)], b = points[pick(rng)], c = points[pick(rng)];
-    const glm::dvec3 n = glm::cross(b - a, c - a);
-    if (glm::length(n) < 1e-12) continue;
-    Plane p{{a, glm::normalize(n)}, 0};
-    for (const glm::dvec3& q : points) p.inliers += std::abs(p.plane.height(q)) < tolerance;
-    if (p.inliers > best.inliers) best = p;
-  }
-  return best;
-}
-
 cv::Mat photo_bgr(const io::Camera& camera) {
   const io::Image image = io::read_image(camera.image);
   cv::Mat bgr(int(image.height), int(image.width), CV_8UC3);
@@ -91,40 +56,20 @@ void graph_cut(const cv::Mat& photo, cv::Mat& labels, std::uint32_t iterations, 
 
 }  // namespace
 
-AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, const AutoMaskOptions& o) {
+AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, const SceneLayout& layout, const AutoMaskOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   AutoMasks out;
   json& report = out.report;
-  const glm::dvec3 focus = common_focus(scene.cameras);
-  std::vector<double> distances;
-  glm::dvec3 camera_mean(0.0);
-  for (const io::Camera& c : scene.cameras) distances.push_back(glm::distance(c.centre(), focus)), camera_mean += c.centre();
-  camera_mean /= double(scene.cameras.size());
-  std::nth_element(distances.begin(), distances.begin() + std::ptrdiff_t(distances.size() / 2), distances.end());
-  const double reach = distances[distances.size() / 2];  // the cameras' median distance: the scene's scale
-
-  // The floor: the dominant plane among the points within reach of the centre (a far wall is left out).
-  std::vector<glm::dvec3> near;
-  for (const glm::dvec3& p : points.positions)
-    if (glm::distance(p, focus) < 1.5 * reach) near.push_back(p);
-  const double tolerance = 0.005 * reach;
-  const Plane found = dominant_plane(near, tolerance);
-  FloorPlane floor = found.plane;
-  const bool has_floor = found.inliers >= std::max<std::size_t>(30, near.size() / 10);
-  if (floor.height(camera_mean) < 0) floor.normal = -floor.normal;
-  // Animal points stand above the floor, near the centre; floor points and far ones are background.
-  std::vector<char> animal(points.positions.size(), 0), background(points.positions.size(), 0);
-  std::vector<glm::dvec3> animal_points;
-  for (std::size_t i = 0; i < points.positions.size(); ++i) {
-    const glm::dvec3& p = points.positions[i];
-    const double h = has_floor ? floor.height(p) : 1.0, d = glm::distance(p, focus);
-    if (h > 3 * tolerance && d < 0.6 * reach) animal[i] = 1, animal_points.push_back(p);
-    else if (std::abs(h) < tolerance || d > 0.8 * reach || h < -3 * tolerance) background[i] = 1;
-  }
+  const glm::dvec3 focus = layout.focus;
+  const double reach = layout.reach;
+  const FloorPlane& floor = layout.floor;
+  const bool has_floor = layout.has_floor;
+  const std::vector<char>&animal = layout.animal, &background = layout.background;
+  const std::vector<glm::dvec3>& animal_points = layout.animal_points;
   report["focus"] = {focus.x, focus.y, focus.z};
   report["camera_distance"] = reach;
   report["floor_found"] = has_floor;
-  report["floor_points"] = found.inliers;
+  report["floor_points"] = layout.floor_points;
   report["animal_points"] = animal_points.size();
   if (animal_points.size() < 20)
     throw InputError("prepare: only " + std::to_string(animal_points.size()) + " sparse points stand above the floor near where the cameras aim, too few to say "
@@ -135,7 +80,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   // body, while the head, tail and legs reach farther. Down to the floor (the paws stand on it).
   glm::dvec3 u = glm::normalize(glm::cross(floor.normal, std::abs(floor.normal.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
   const glm::dvec3 v = glm::cross(floor.normal, u), n = floor.normal;
-  const glm::dvec3 base = focus - floor.height(focus) * n;  // the centre's foot on the floor
+  const glm::dvec3 base = layout.base();
   double horizontal = 0, top = 0;
   for (const glm::dvec3& p : animal_points) {
     const glm::dvec3 d = p - base;
@@ -280,6 +225,20 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
     each_view(hull_cut);
   }
   voxels = carve();
+  // A cut that lost the animal (a view whose seeds and colours misled the graph cut) takes the
+  // hull the other views agree on instead, and is named.
+  std::vector<double> shares(views);
+  for (std::size_t i = 0; i < views; ++i) shares[i] = double(cv::countNonZero(cut[i])) / double(cut[i].total());
+  std::vector<double> sorted_shares = shares;
+  std::nth_element(sorted_shares.begin(), sorted_shares.begin() + std::ptrdiff_t(views / 2), sorted_shares.end());
+  std::vector<std::string> replaced;
+  for (std::size_t i = 0; i < views; ++i)
+    if (shares[i] < 0.3 * sorted_shares[views / 2] && cv::countNonZero(hull_masks[i]) > 0) {
+      cut[i] = hull_masks[i].clone();
+      replaced.push_back(scene.cameras[i].name);
+    }
+  report["replaced_by_hull"] = replaced;
+  if (!replaced.empty()) log::warn("prepare: ", replaced.size(), " automatic mask(s) lost the animal and take the other views' hull instead: ", replaced.front(), replaced.size() > 1 ? ", ..." : "");
   report["hull_voxels"] = voxels;
   report["hull_voxel_size"] = side;
   // The hull drawn back is a little fat (discs, voxels), so a view is judged against the others:

@@ -1,8 +1,7 @@
 #pragma once
 // Masks made without a hand, for photos whose cameras COLMAP found. The animal is what every camera
-// looks at: the point nearest all the cameras' axes is its centre, the floor is the plane most sparse
-// points lie on, and the points that stand above the floor near the centre are the animal (the rest,
-// floor and far surroundings, are background). Each photo is segmented by a graph cut on colour
+// looks at and stands on the floor (scene_layout.hpp: its sparse points stand above the floor near
+// where the cameras aim; floor and far points are background). Each photo is segmented by a graph cut on colour
 // (OpenCV's GrabCut), bounded by the animal's box and seeded by where that photo observed animal and
 // background points and by what the other photos say of its floor (floor_consistency.hpp: the legs
 // and the body seen against the floor stand out, the floor and shadows on it agree); then the masks
@@ -13,6 +12,7 @@
 
 #include "engine/core/json.hpp"
 #include "engine/io/scene.hpp"
+#include "engine/prepare/scene_layout.hpp"
 #include "engine/prepare/sparse_points.hpp"
 
 namespace nf::prepare {
@@ -28,8 +28,9 @@ struct AutoMasks {
   json report;  // the centre, floor and animal points found, and per view its share of animal and its agreement with the hull
 };
 
-// The scene's cameras must be undistorted pinholes with their photos; `points` from the same model.
+// The scene's cameras must be undistorted pinholes with their photos; `points` and `layout` from the
+// same model (scene_layout.hpp finds the centre, the floor and the animal's points).
 // Throws InputError when too few sparse points stand above the floor to say where the animal is.
-AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, const AutoMaskOptions& options = {});
+AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, const SceneLayout& layout, const AutoMaskOptions& options = {});
 
 }  // namespace nf::prepare

@@ -12,13 +12,9 @@
 #include <opencv2/core.hpp>
 
 #include "engine/io/scene.hpp"
+#include "engine/prepare/scene_layout.hpp"
 
 namespace nf::prepare {
-
-struct FloorPlane {
-  glm::dvec3 point{0.0}, normal{0.0, 1.0, 0.0};  // the normal points to the cameras' side
-  double height(const glm::dvec3& p) const { return glm::dot(p - point, normal); }
-};
 
 enum FloorEvidence : std::uint8_t { kUnknown = 0, kFloor = 1, kOffFloor = 2 };
 

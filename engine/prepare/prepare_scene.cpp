@@ -17,6 +17,7 @@
 #include "engine/io/scene.hpp"
 #include "engine/prepare/auto_masks.hpp"
 #include "engine/prepare/colmap_command.hpp"
+#include "engine/prepare/scene_layout.hpp"
 #include "engine/prepare/sparse_points.hpp"
 
 namespace nf::prepare {
@@ -225,9 +226,11 @@ json prepare_scene(const PrepareOptions& o) {
 
   start = std::chrono::steady_clock::now();
   io::Scene scene = io::read_colmap_scene(undistorted);
+  const SparsePoints sparse = read_sparse_points(undistorted);
+  const SceneLayout layout = find_layout(scene.cameras, sparse);
   std::vector<std::vector<std::uint8_t>> made;
   if (automatic) {
-    AutoMasks found = automatic_masks(scene, read_sparse_points(undistorted));
+    AutoMasks found = automatic_masks(scene, sparse, layout);
     made = std::move(found.masks);
     report["automatic_masks"] = std::move(found.report);
     steps.add("automatic_masks", report["automatic_masks"]["seconds"].get<double>());
@@ -261,6 +264,18 @@ json prepare_scene(const PrepareOptions& o) {
   const auto [reprojection, points] = point_statistics(undistorted);
   report["reprojection_error_px"] = reprojection;
   report["points"] = points;
+  // Upright: COLMAP's frame is the first photo's, tilted as it was held; the stages and the user's
+  // 3D tools read +y as up and expect the animal near the origin.
+  const glm::dmat4 to_scene = upright_transform(layout);
+  for (io::Camera& c : scene.cameras) c.camera_to_world = to_scene * c.camera_to_world;
+  json rows = json::array();
+  for (int r = 0; r < 4; ++r) rows.push_back({to_scene[0][r], to_scene[1][r], to_scene[2][r], to_scene[3][r]});
+  report["frame"] = {{"up_from", layout.has_floor ? "floor" : "cameras"}, {"floor_points", layout.floor_points},
+                     {"floor_tilt_deg", layout.floor_tilt_deg}, {"colmap_to_scene", rows}};
+  if (layout.has_floor && layout.floor_tilt_deg > 25)
+    log::warn("prepare: the floor the sparse points show tilts ", std::lround(layout.floor_tilt_deg), " degrees from the cameras' mean up; "
+              "its normal is taken as up (photos held sideways, or a slope)");
+  if (!layout.has_floor) log::warn("prepare: no floor among the sparse points; up is the cameras' mean up vector");
   scene.root = work;
   if (o.cm_per_unit) scene.cm_per_unit = *o.cm_per_unit;
   report["cm_per_unit"] = o.cm_per_unit ? json(*o.cm_per_unit) : json(nullptr);

@@ -43,6 +43,7 @@ bool true_inside(const io::Camera& prepared, const io::Camera& truth, const std:
 
 struct Agreement {
   double worst_angle_deg = 0, worst_centre = 0, worst_iou = 1, median_iou = 0;
+  double up_error_deg = 0;  // the prepared scene's +y against the truth's (synth scenes are y-up)
 };
 
 // The prepared cameras against the truth after the best similarity transform (Umeyama on the
@@ -59,6 +60,8 @@ Agreement compare(const io::Scene& prepared, const io::Scene& truth, const fs::p
   const Eigen::Matrix4d similarity = Eigen::umeyama(from, to, true);
   const Eigen::Matrix3d scaled = similarity.topLeftCorner<3, 3>();
   const Eigen::Matrix3d align = scaled / std::cbrt(scaled.determinant());
+  Agreement r;
+  r.up_error_deg = std::acos(std::clamp((align * Eigen::Vector3d::UnitY()).dot(Eigen::Vector3d::UnitY()), -1.0, 1.0)) * 180 / M_PI;
   // The scene's radius: the true animal's bounding sphere around its box's centre.
   const geometry::Mesh outer = io::read_mesh(truth_root / "gt" / "outer.ply");
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e30), hi = -lo;
@@ -68,7 +71,6 @@ Agreement compare(const io::Scene& prepared, const io::Scene& truth, const fs::p
   for (std::size_t v = 0; v < outer.vertex_count(); ++v)
     radius = std::max(radius, (Eigen::Vector3d(outer.positions[3 * v], outer.positions[3 * v + 1], outer.positions[3 * v + 2]) - 0.5 * (lo + hi)).norm());
 
-  Agreement r;
   std::vector<double> ious;
   for (const io::Camera& p : prepared.cameras) {
     const io::Camera& t = *by_name[p.name];
@@ -142,9 +144,11 @@ TEST_CASE("prepare places every photo of a textured synth scene near the true ca
   prepared.check_files("prepared");
   CHECK(fs::exists(o.out / "previews" / "000.jpg"));
   const Agreement a = compare(prepared, f.truth, f.root / "truth");
-  MESSAGE("prepare: lens ", report["cameras"].dump(), "; worst rotation error ", a.worst_angle_deg, " deg, worst centre error ", 100 * a.worst_centre, " % of the radius, mask IoU median ",
+  MESSAGE("prepare: lens ", report["cameras"].dump(), "; worst rotation error ", a.worst_angle_deg, " deg, worst centre error ", 100 * a.worst_centre, " % of the radius, up ", a.up_error_deg, " deg off, mask IoU median ",
           a.median_iou, " worst ", a.worst_iou, ", ", report["seconds"]["total"].get<double>(), " s");
   CHECK(a.worst_angle_deg < max_angle_deg);
+  CHECK(report["frame"]["up_from"] == "floor");
+  CHECK(a.up_error_deg < 1.0);  // written upright
   CHECK(a.worst_centre < max_centre);
   CHECK(a.worst_iou > min_iou);
 
@@ -169,9 +173,10 @@ TEST_CASE("prepare places every photo of a textured synth scene near the true ca
 
 TEST_CASE("prepare makes the masks itself when the photos have none, close to the true masks") {
   // The issue's bounds (median IoU >= 0.95, worst >= 0.90) on the full scene; the small scene's
-  // outlines are a larger share of its masks (320 px: median 0.935, worst 0.91 measured).
+  // outlines are a larger share of its masks, and its 24-33 animal points vary with COLMAP's run
+  // (320 px: median 0.917-0.935, worst 0.89-0.91 measured).
   const Fixture& f = fixture();
-  const double min_median = f.full ? 0.95 : 0.90, min_worst = f.full ? 0.90 : 0.85;
+  const double min_median = f.full ? 0.95 : 0.88, min_worst = f.full ? 0.90 : 0.80;
   const prepare::PrepareOptions o = f.options("automatic");
   const json report = prepare::prepare_scene(o);
   CHECK(report["masks"] == "automatic");
