@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <random>
 #include <string>
 
 #include <opencv2/imgproc.hpp>
@@ -78,7 +77,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
 
   // The animal's box in the floor's frame, generous: sparse points on fur are few and cluster on the
   // body, while the head, tail and legs reach farther. Down to the floor (the paws stand on it).
-  glm::dvec3 u = glm::normalize(glm::cross(floor.normal, std::abs(floor.normal.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
+  const glm::dvec3 u = glm::normalize(glm::cross(floor.normal, std::abs(floor.normal.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
   const glm::dvec3 v = glm::cross(floor.normal, u), n = floor.normal;
   const glm::dvec3 base = layout.base();
   double horizontal = 0, top = 0;
@@ -90,8 +89,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   horizontal = std::clamp(1.6 * horizontal, 0.3 * reach, 0.6 * reach);
   top = std::min(1.5 * top, 0.8 * reach);
   glm::dvec3 lo(-horizontal, -horizontal, has_floor ? 0.0 : -top), hi(horizontal, horizontal, top);
-  const FloorPlane box_frame{base, n};
-  const auto world = [&](const glm::dvec3& local) { return box_frame.point + local.x * u + local.y * v + local.z * n; };
+  const auto world = [&](const glm::dvec3& local) { return base + local.x * u + local.y * v + local.z * n; };
   std::vector<glm::dvec3> corners;
   for (int k = 0; k < 8; ++k) corners.push_back(world({k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z}));
 
@@ -158,13 +156,15 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   // view as discs of the voxel's size.
   const double side = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) / double(o.hull_cells);
   const glm::uvec3 cells(glm::max(glm::dvec3(1.0), glm::ceil((hi - lo) / side)));
+  const auto voxel_centre = [&](std::size_t k) {
+    return world(lo + side * (glm::dvec3(double(k % cells.x), double((k / cells.x) % cells.y), double(k / (std::size_t(cells.x) * cells.y))) + 0.5));
+  };
   const auto carve = [&] {
     const std::size_t total = std::size_t(cells.x) * cells.y * cells.z;
     std::vector<char> kept(total, 0);
     parallel_for(total, [&](std::size_t k0, std::size_t k1) {
       for (std::size_t k = k0; k < k1; ++k) {
-        const glm::dvec3 local = lo + side * (glm::dvec3(double(k % cells.x), double((k / cells.x) % cells.y), double(k / (std::size_t(cells.x) * cells.y))) + 0.5);
-        const glm::dvec3 p = world(local);
+        const glm::dvec3 p = voxel_centre(k);
         std::size_t misses = 0, seen = 0;
         for (std::size_t i = 0; i < views; ++i) {
           const glm::dvec3 q = scene.cameras[i].project(p);
@@ -178,7 +178,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
     std::vector<glm::dvec3> voxels;
     for (std::size_t k = 0; k < total; ++k)
       if (kept[k])
-        voxels.push_back(world(lo + side * (glm::dvec3(double(k % cells.x), double((k / cells.x) % cells.y), double(k / (std::size_t(cells.x) * cells.y))) + 0.5)));
+        voxels.push_back(voxel_centre(k));
     parallel_for(views, [&](std::size_t i0, std::size_t i1) {
       for (std::size_t i = i0; i < i1; ++i) {
         const io::Camera& c = scene.cameras[i];
