@@ -170,6 +170,8 @@ int run_prepare(const nf::prepare::PrepareOptions& options) {
   std::printf("prepare: %zu of %zu photos placed, reprojection error %.2f px, %zu points -> %s (%.1f s)\n",
               report["placed"].get<std::size_t>(), report["photos"].get<std::size_t>(), report["reprojection_error_px"].get<double>(),
               report["points"].get<std::size_t>(), options.out.string().c_str(), report["seconds"]["total"].get<double>());
+  if (report["cm_per_unit"].is_number())
+    std::printf("prepare: %.4g cm per scene unit (from %s)\n", report["cm_per_unit"].get<double>(), report["unit_from"].get<std::string>().c_str());
   return 0;
 }
 
@@ -453,10 +455,14 @@ int main(int argc, char** argv) {
                   "also write gt/orientation/<camera>.exr: the true on-screen orientation of the strands (nf_gpu orient scores its maps against it)");
 
   nf::prepare::PrepareOptions prepare_options;
-  std::string prepare_images, prepare_out, prepare_masks, prepare_colmap;
+  std::string prepare_images, prepare_video, prepare_out, prepare_masks, prepare_colmap, prepare_known;
   double prepare_scale = 0;
-  auto* prepare = app.add_subcommand("prepare", "your own photos to a scene: cameras by COLMAP, the photos and masks undistorted (transforms.json, images/, masks/)");
-  prepare->add_option("--images", prepare_images, "a folder of photos of the animal (PNG or JPEG), 30-80 taken around it")->required();
+  auto* prepare = app.add_subcommand("prepare", "your own photos or video to a scene: cameras by COLMAP, masks, the photos and masks undistorted (transforms.json, images/, masks/)");
+  auto* prepare_from_images = prepare->add_option("--images", prepare_images, "a folder of photos of the animal (PNG or JPEG), 30-80 taken around it");
+  auto* prepare_from_video = prepare->add_option("--video", prepare_video, "a video circling the animal (any format ffmpeg reads); --frames sharp frames are taken from it");
+  prepare_from_images->excludes(prepare_from_video);
+  prepare->add_option("--frames", prepare_options.video_frames, "with --video: how many frames to keep, the sharpest of each stretch (default 60)")
+      ->check(CLI::Range(8, 400));
   prepare->add_option("--out", prepare_out, "the scene folder to write (must be new)")->required();
   prepare->add_option("--masks", prepare_masks, "one mask per photo (white animal on black), named like the photo; without it, the photos' alpha channel")
       ->check(CLI::ExistingDirectory);
@@ -464,6 +470,10 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingDirectory);
   prepare->add_option("--scene-scale", prepare_scale, "cm per scene unit, when known (COLMAP's unit is arbitrary; without it the knowledge stage estimates the scale)")
       ->check(CLI::PositiveNumber);
+  prepare->add_option("--known-distance", prepare_known,
+                      "a JSON file: two points picked in two or more photos each and their distance in cm, which sets the unit "
+                      "({\"cm\": 30, \"points\": [{\"a.jpg\": [x, y], \"b.jpg\": [x, y]}, {...}]}, pixels as a viewer shows them)")
+      ->check(CLI::ExistingFile);
   prepare->add_option("--max-features", prepare_options.max_features, "SIFT features per photo (default 4096; matching time grows with its square)")
       ->check(CLI::Range(256, 65536));
 
@@ -608,7 +618,8 @@ int main(int argc, char** argv) {
     }
     if (*synth) return run_synth(synth_out, synth_options);
     if (*prepare) {
-      prepare_options.images = prepare_images, prepare_options.out = prepare_out;
+      prepare_options.images = prepare_images, prepare_options.video = prepare_video, prepare_options.out = prepare_out;
+      prepare_options.known_distance = prepare_known;
       prepare_options.masks = prepare_masks, prepare_options.colmap_model = prepare_colmap;
       if (prepare_scale > 0) prepare_options.cm_per_unit = prepare_scale;
       return run_prepare(prepare_options);

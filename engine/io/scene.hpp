@@ -46,7 +46,8 @@ Scene read_transforms_json(const std::filesystem::path& file);
 void write_transforms_json(const std::filesystem::path& file, const Scene& scene);
 Scene read_neus_scene(const std::filesystem::path& folder);      // cameras_sphere.npz, image/, mask/
 Scene read_artemis_scene(const std::filesystem::path& folder);   // CamPose.inf, Intrinsic.inf, img_XXXX.jpg
-Scene read_colmap_scene(const std::filesystem::path& folder, const std::filesystem::path& masks = {});  // cameras.txt, images.txt
+// cameras.txt and images.txt in `folder`; the photos in `images` (default: folder/images).
+Scene read_colmap_scene(const std::filesystem::path& folder, const std::filesystem::path& masks = {}, const std::filesystem::path& images = {});
 
 // A folder in any of the formats above (or a transforms.json file).
 Scene read_scene(const std::filesystem::path& path);

@@ -141,7 +141,7 @@ Scene read_artemis_scene(const fs::path& folder) {
   return scene;
 }
 
-Scene read_colmap_scene(const fs::path& folder, const fs::path& masks) {
+Scene read_colmap_scene(const fs::path& folder, const fs::path& masks, const fs::path& images_dir) {
   const std::string cameras_file = (folder / "cameras.txt").string(), images_file = (folder / "images.txt").string();
   std::ifstream cameras(cameras_file), images(images_file);
   if (!cameras) throw InputError(cameras_file + ": cannot open");
@@ -208,7 +208,7 @@ Scene read_colmap_scene(const fs::path& folder, const fs::path& masks) {
     c.width = it->second.w, c.height = it->second.h;
     c.fx = it->second.fx, c.fy = it->second.fy, c.cx = it->second.cx, c.cy = it->second.cy;
     c.camera_to_world = opencv_to_opengl(c2w);
-    c.image = folder / "images" / name;
+    c.image = (images_dir.empty() ? folder / "images" : images_dir) / name;
     if (!masks.empty()) c.mask = masks / (c.name + ".png");
     scene.cameras.push_back(c);
   }
@@ -225,7 +225,7 @@ Scene read_scene_format(const fs::path& path) {
   if (fs::exists(path / "CamPose.inf")) return read_artemis_scene(path);
   if (fs::exists(path / "cameras.txt")) return read_colmap_scene(path, fs::exists(path / "masks") ? path / "masks" : fs::path());
   if (fs::exists(path / "sparse" / "0" / "cameras.txt"))
-    return read_colmap_scene(path / "sparse" / "0", fs::exists(path / "masks") ? path / "masks" : fs::path());
+    return read_colmap_scene(path / "sparse" / "0", fs::exists(path / "masks") ? path / "masks" : fs::path(), path / "images");  // COLMAP's project layout
   throw InputError(path.string() + ": no scene found (transforms.json, cameras_sphere.npz, CamPose.inf or COLMAP cameras.txt)");
 }
 

@@ -1,96 +1,25 @@
 #include "engine/prepare/colmap_command.hpp"
 
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <cerrno>
 #include <cstdlib>
-#include <cstring>
-#include <deque>
-#include <fstream>
 
-#include "engine/core/error.hpp"
-#include "engine/core/log.hpp"
-#include "engine/core/stopwatch.hpp"
-
-extern char** environ;
+#include "engine/prepare/external_tool.hpp"
 
 namespace nf::prepare {
 
-namespace fs = std::filesystem;
-
 std::string colmap_executable() {
-  if (const char* named = std::getenv("NF_COLMAP"); named && *named) {
-    if (access(named, X_OK) != 0) throw UsageError(std::string("NF_COLMAP names ") + named + ", which is not an executable file");
-    return named;
-  }
-  if (const char* path = std::getenv("PATH"))
-    for (std::string dirs = path; !dirs.empty();) {
-      const std::size_t colon = dirs.find(':');
-      const fs::path candidate = fs::path(dirs.substr(0, colon)) / "colmap";
-      if (access(candidate.c_str(), X_OK) == 0) return candidate.string();
-      dirs = colon == std::string::npos ? "" : dirs.substr(colon + 1);
-    }
-  throw UsageError("prepare needs COLMAP to find the cameras and none is on PATH: install it (Debian: apt-get install colmap), "
+  return find_tool("colmap", "NF_COLMAP",
+                   "prepare needs COLMAP to find the cameras and none is on PATH: install it (Debian: apt-get install colmap), "
                    "set NF_COLMAP to its binary, or pass --colmap with a model COLMAP made elsewhere");
 }
 
-namespace {
-
-std::string last_lines(const fs::path& log, std::streamoff from, std::size_t count) {
-  std::ifstream in(log);
-  in.seekg(from);
-  std::deque<std::string> lines;
-  for (std::string line; std::getline(in, line);) {
-    if (line.find_first_not_of(" \t\r=") == std::string::npos) continue;
-    lines.push_back(line);
-    if (lines.size() > count) lines.pop_front();
-  }
-  std::string text;
-  for (const std::string& line : lines) text += "\n  " + line;
-  return text;
-}
-
-}  // namespace
-
-double run_colmap(const std::string& command, const std::vector<std::string>& args, const fs::path& log) {
-  const std::string exe = colmap_executable();
-  std::vector<std::string> words = {exe, command};
+double run_colmap(const std::string& command, const std::vector<std::string>& args, const std::filesystem::path& log) {
+  std::vector<std::string> words = {command};
   words.insert(words.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& w : words) argv.push_back(w.data());
-  argv.push_back(nullptr);
-  // COLMAP's binary links Qt even for its command-line steps; there is no display to open.
+  // COLMAP's binary links Qt even for its command-line steps, and there is no display to open; its
+  // glog lines go to its stderr (the log), not to files in /tmp.
   setenv("QT_QPA_PLATFORM", "offscreen", 0);
-
-  const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
-  if (fd < 0) throw InputError(log.string() + ": cannot open the COLMAP log for writing");
-  const std::streamoff start = lseek(fd, 0, SEEK_END);
-  const std::string banner = "\n$ colmap " + command + "\n";
-  (void)!write(fd, banner.data(), banner.size());
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, fd, STDOUT_FILENO);
-  posix_spawn_file_actions_adddup2(&actions, fd, STDERR_FILENO);
-  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  Stopwatch clock;
-  pid_t pid = 0;
-  const int spawned = posix_spawn(&pid, exe.c_str(), &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  close(fd);
-  if (spawned != 0) throw InputError("colmap " + command + ": cannot start " + exe + " (" + std::strerror(spawned) + ")");
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  const double seconds = clock.seconds();
-  const int code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  if (code != 0)
-    throw InputError("colmap " + command + " failed (exit status " + std::to_string(code) + "); its last lines:" +
-                     last_lines(log, start, 8) + "\nthe whole output is in " + log.string());
-  log::info("prepare: colmap ", command, " in ", std::to_string(seconds).substr(0, 5), " s");
-  return seconds;
+  setenv("GLOG_logtostderr", "1", 0);
+  return run_tool(colmap_executable(), "colmap " + command, words, log);
 }
 
 }  // namespace nf::prepare

@@ -17,8 +17,11 @@
 #include "engine/io/scene.hpp"
 #include "engine/prepare/auto_masks.hpp"
 #include "engine/prepare/colmap_command.hpp"
+#include "engine/prepare/colmap_models.hpp"
+#include "engine/prepare/known_distance.hpp"
 #include "engine/prepare/scene_layout.hpp"
 #include "engine/prepare/sparse_points.hpp"
+#include "engine/prepare/video_frames.hpp"
 
 namespace nf::prepare {
 
@@ -26,7 +29,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr std::size_t kMinPhotos = 3;
+constexpr std::size_t kMinPhotos = 8;  // fewer cannot show an animal all round; COLMAP itself needs 3
 constexpr std::size_t kExhaustiveLimit = 150;  // beyond it, exhaustive matching's pairs take hours on a laptop
 
 std::string lower(std::string s) {
@@ -45,14 +48,6 @@ fs::path mask_file(const fs::path& masks, const fs::path& photo) {
                                     masks / (photo.stem().string() + ".jpg"), masks / (photo.filename().string() + ".png")})
     if (fs::is_regular_file(candidate)) return candidate;
   return {};
-}
-
-// Registered images in a COLMAP binary model: images.bin starts with their count (uint64).
-std::uint64_t registered_images(const fs::path& model) {
-  std::ifstream in(model / "images.bin", std::ios::binary);
-  std::uint64_t n = 0;
-  if (!in.read(reinterpret_cast<char*>(&n), sizeof n)) return 0;
-  return n;
 }
 
 // The mean reprojection error and the number of points of a text model's points3D.txt.
@@ -115,6 +110,28 @@ json camera_lines(const fs::path& file) {
   return cameras;
 }
 
+// The photos in a folder, sorted by name (the order sequential matching follows); other files are
+// named in a warning.
+std::vector<fs::path> list_photos(const fs::path& folder) {
+  if (!fs::is_directory(folder)) throw InputError("prepare: --images " + folder.string() + " is not a folder");
+  std::vector<fs::path> photos;
+  std::vector<std::string> skipped;
+  for (const fs::directory_entry& e : fs::directory_iterator(folder)) {
+    if (!e.is_regular_file()) continue;
+    if (is_photo(e.path())) photos.push_back(e.path());
+    else skipped.push_back(e.path().filename().string());
+  }
+  std::sort(photos.begin(), photos.end());
+  std::sort(skipped.begin(), skipped.end());
+  const std::string some_skipped = skipped.empty() ? "" : skipped.front() + (skipped.size() > 1 ? ", ..." : "");
+  if (photos.size() < kMinPhotos)
+    throw InputError("prepare: " + std::to_string(photos.size()) + " PNG or JPEG photo(s) in " + folder.string() +
+                     (skipped.empty() ? "" : " (besides " + std::to_string(skipped.size()) + " other file(s): " + some_skipped + ")") +
+                     "; prepare needs at least " + std::to_string(kMinPhotos) + ", and a good scene 30-80 photos taken in a circle around the animal");
+  if (!skipped.empty()) log::warn("prepare: ", skipped.size(), " file(s) in ", folder.string(), " are not PNG or JPEG photos and are left out (", some_skipped, ")");
+  return photos;
+}
+
 double since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -123,27 +140,26 @@ double since(std::chrono::steady_clock::time_point start) {
 
 json prepare_scene(const PrepareOptions& o) {
   // Everything the user can get wrong is checked before COLMAP runs for minutes.
-  if (!fs::is_directory(o.images)) throw InputError("prepare: --images " + o.images.string() + " is not a folder");
+  const bool from_video = !o.video.empty();
+  if (from_video == !o.images.empty()) throw UsageError("prepare: give the photos (--images DIR) or a video (--video FILE), one of them");
+  if (from_video && !o.masks.empty()) throw UsageError("prepare: --masks goes with --images; a video's frames are chosen here, and their masks made here");
+  if (from_video && !o.colmap_model.empty()) throw UsageError("prepare: --colmap goes with --images (the photos the model was made from)");
+  if (from_video && !fs::is_regular_file(o.video)) throw InputError("prepare: --video " + o.video.string() + " is not a file");
+  if (o.cm_per_unit && !o.known_distance.empty()) throw UsageError("prepare: --scene-scale and --known-distance both set the unit; give one");
+  std::optional<KnownDistance> known;
+  if (!o.known_distance.empty()) known = read_known_distance(o.known_distance);
   std::vector<fs::path> photos;
-  std::vector<std::string> skipped;
-  for (const fs::directory_entry& e : fs::directory_iterator(o.images)) {
-    if (!e.is_regular_file()) continue;
-    if (is_photo(e.path())) photos.push_back(e.path());
-    else skipped.push_back(e.path().filename().string());
+  if (!from_video) {
+    photos = list_photos(o.images);
+    for (const fs::path& p : photos) io::require_complete_image(p);  // truncated photos are named now, not by COLMAP
   }
-  std::sort(photos.begin(), photos.end());
-  std::sort(skipped.begin(), skipped.end());
-  if (!skipped.empty()) log::warn("prepare: ", skipped.size(), " file(s) in ", o.images.string(), " are not PNG or JPEG photos and are left out (", skipped.front(), skipped.size() > 1 ? ", ..." : "", ")");
-  if (photos.size() < kMinPhotos)
-    throw InputError("prepare: " + std::to_string(photos.size()) + " photo(s) in " + o.images.string() +
-                     "; COLMAP needs at least 3 overlapping photos, and a good scene 30-80 taken around the animal");
-  for (const fs::path& p : photos) io::require_complete_image(p);  // truncated photos are named now, not by COLMAP
 
   // Masks: the user's, the photos' alpha, or (when a photo has neither) made here once the cameras are known.
-  const bool automatic = o.masks.empty() && std::any_of(photos.begin(), photos.end(), [](const fs::path& p) {
+  // A video's frames (decoded here, after this) have no alpha.
+  const bool automatic = from_video || (o.masks.empty() && std::any_of(photos.begin(), photos.end(), [](const fs::path& p) {
     const std::uint32_t channels = io::image_channels(p);
     return channels != 2 && channels != 4;
-  });
+  }));
   std::map<std::string, io::Image> masks;  // by photo name, one channel
   for (const fs::path& p : automatic ? std::vector<fs::path>() : photos) {
     fs::path file = p;
@@ -162,43 +178,47 @@ json prepare_scene(const PrepareOptions& o) {
 
   const fs::path out = fs::absolute(o.out).lexically_normal();
   if (fs::exists(out)) throw UsageError("prepare: --out " + out.string() + " exists; name a new folder (nothing there is replaced)");
-  refuse_output_inside(out, o.images, "--out", "photos");
+  if (!from_video) refuse_output_inside(out, o.images, "--out", "photos");
   if (!o.masks.empty()) refuse_output_inside(out, o.masks, "--out", "masks");
   const fs::path work = out.parent_path() / (out.filename().string() + ".partial");
+  if (!o.colmap_model.empty() && fs::absolute(o.colmap_model).lexically_normal().string().rfind(work.string() + "/", 0) == 0)
+    throw UsageError("prepare: --colmap " + o.colmap_model.string() + " lies in " + work.string() + ", which this run clears: choose another --out");
   fs::remove_all(work);
   create_output_folder(work / "colmap", "--out");
   const fs::path log_file = work / "colmap" / "colmap.log";
 
   json report;
+  fs::path images = o.images;
+  if (from_video) {
+    images = work / "colmap" / "frames";  // kept: --images for a later --colmap run on the same model
+    report["video"] = extract_video_frames({o.video, images, o.video_frames, 4, log_file});
+    photos = list_photos(images);
+  }
   report["photos"] = photos.size();
-  report["skipped_files"] = skipped;
   report["masks"] = automatic ? "automatic" : o.masks.empty() ? "alpha" : "given";
   Steps steps(report);
   const fs::path database = work / "colmap" / "database.db";
   fs::path model = o.colmap_model;
   if (model.empty()) {
-    steps.add("features", run_colmap("feature_extractor", {"--database_path", database.string(), "--image_path", o.images.string(),
+    steps.add("features", run_colmap("feature_extractor", {"--database_path", database.string(), "--image_path", images.string(),
                                                           "--ImageReader.single_camera", "1", "--ImageReader.camera_model", "SIMPLE_RADIAL",
                                                           "--SiftExtraction.use_gpu", "0", "--SiftExtraction.max_num_features", std::to_string(o.max_features)},
                                      log_file));
+    // Exhaustive matching finds the loop a circle closes; beyond a few hundred photos its pairs take
+    // hours, and the photos' order (a video's, or a camera's file names) says which are neighbours.
     const bool exhaustive = photos.size() <= kExhaustiveLimit;
     report["matching"] = exhaustive ? "exhaustive" : "sequential";
-    steps.add("matching", run_colmap(exhaustive ? "exhaustive_matcher" : "sequential_matcher",
-                                     {"--database_path", database.string(), "--SiftMatching.use_gpu", "0"}, log_file));
+    steps.add("matching", exhaustive ? run_colmap("exhaustive_matcher", {"--database_path", database.string(), "--SiftMatching.use_gpu", "0"}, log_file)
+                                     : run_colmap("sequential_matcher", {"--database_path", database.string(), "--SiftMatching.use_gpu", "0",
+                                                                         "--SequentialMatching.overlap", "20", "--SequentialMatching.quadratic_overlap", "1"},
+                                                  log_file));
     const fs::path sparse = work / "colmap" / "sparse";
     fs::create_directories(sparse);
-    steps.add("mapping", run_colmap("mapper", {"--database_path", database.string(), "--image_path", o.images.string(), "--output_path", sparse.string()}, log_file));
-    // COLMAP writes one model per connected group of photos; the largest is the animal.
-    std::uint64_t best = 0;
-    std::size_t models = 0;
-    for (const fs::directory_entry& e : fs::directory_iterator(sparse)) {
-      if (!fs::exists(e.path() / "images.bin")) continue;
-      ++models;
-      if (const std::uint64_t n = registered_images(e.path()); n > best) best = n, model = e.path();
-    }
-    if (model.empty()) throw InputError("prepare: COLMAP placed no cameras (see " + log_file.string() + "): the photos share too few features; take more photos with more overlap, of a textured scene");
-    report["colmap_models"] = models;
-    if (models > 1) log::warn("prepare: COLMAP found ", models, " separate groups of photos; the largest (", best, " photos) is kept");
+    steps.add("mapping", run_colmap("mapper", {"--database_path", database.string(), "--image_path", images.string(), "--output_path", sparse.string()}, log_file));
+    // COLMAP writes one model per connected group of photos; the largest is the animal, unless two are alike.
+    const std::vector<ColmapModel> models = read_colmap_models(sparse);
+    model = choose_colmap_model(models, kMinPhotos, log_file).folder;
+    report["colmap_models"] = models.size();
   } else if (!fs::exists(model / "images.bin") && !fs::exists(model / "images.txt")) {
     throw InputError("prepare: --colmap " + model.string() + " holds no COLMAP model (images.bin or images.txt)");
   }
@@ -213,7 +233,7 @@ json prepare_scene(const PrepareOptions& o) {
     io::write_png(mask_input / name, m);
   }
   if (!automatic) steps.add("masks_staged", since(start));
-  steps.add("undistort", run_colmap("image_undistorter", {"--image_path", o.images.string(), "--input_path", model.string(), "--output_path", undistorted.string(), "--output_type", "COLMAP"}, log_file));
+  steps.add("undistort", run_colmap("image_undistorter", {"--image_path", images.string(), "--input_path", model.string(), "--output_path", undistorted.string(), "--output_type", "COLMAP"}, log_file));
   if (!automatic)
     steps.add("undistort_masks", run_colmap("image_undistorter", {"--image_path", mask_input.string(), "--input_path", model.string(), "--output_path", undistorted_masks.string(), "--output_type", "COLMAP"}, log_file));
   steps.add("model_text", run_colmap("model_converter", {"--input_path", (undistorted / "sparse").string(), "--output_path", undistorted.string(), "--output_type", "TXT"}, log_file));
@@ -222,12 +242,28 @@ json prepare_scene(const PrepareOptions& o) {
   fs::create_directories(lens);
   steps.add("lens", run_colmap("model_converter", {"--input_path", model.string(), "--output_path", lens.string(), "--output_type", "TXT"}, log_file));
   report["cameras"] = camera_lines(lens / "cameras.txt");
+  const std::map<std::string, Lens> lenses = read_lenses(lens);
   fs::remove_all(lens);
 
   start = std::chrono::steady_clock::now();
   io::Scene scene = io::read_colmap_scene(undistorted);
   const SparsePoints sparse = read_sparse_points(undistorted);
-  const SceneLayout layout = find_layout(scene.cameras, sparse);
+  SceneLayout layout = find_layout(scene.cameras, sparse);
+  // Cameras COLMAP put where no photo of the animal was taken are left out (they would mislead the
+  // masks and every stage after), then the layout is found again without them.
+  const std::vector<StrayCamera> strays = stray_cameras(scene.cameras, layout);
+  report["stray_cameras"] = json::array();
+  for (auto stray = strays.rbegin(); stray != strays.rend(); ++stray) {
+    const std::string name = scene.cameras[stray->index].image.filename().string();
+    report["stray_cameras"].push_back({{"photo", name}, {"reason", stray->reason}});
+    log::warn("prepare: COLMAP's pose for ", name, " is left out: ", stray->reason);
+    scene.cameras.erase(scene.cameras.begin() + std::ptrdiff_t(stray->index));
+  }
+  if (!strays.empty()) {
+    if (scene.cameras.size() < kMinPhotos)
+      throw InputError("prepare: only " + std::to_string(scene.cameras.size()) + " of the photos COLMAP placed are plausible (see prepare's warnings); take more photos, in a circle around the animal");
+    layout = find_layout(scene.cameras, sparse);
+  }
   std::vector<std::vector<std::uint8_t>> made;
   if (automatic) {
     AutoMasks found = automatic_masks(scene, sparse, layout);
@@ -278,7 +314,15 @@ json prepare_scene(const PrepareOptions& o) {
   if (!layout.has_floor) log::warn("prepare: no floor among the sparse points; up is the cameras' mean up vector");
   scene.root = work;
   if (o.cm_per_unit) scene.cm_per_unit = *o.cm_per_unit;
-  report["cm_per_unit"] = o.cm_per_unit ? json(*o.cm_per_unit) : json(nullptr);
+  if (known) {
+    report["known_distance"] = scale_from_known_distance(*known, lenses, scene.cameras, "--known-distance " + o.known_distance.string());
+    scene.cm_per_unit = report["known_distance"]["cm_per_unit"].get<double>();
+  }
+  report["cm_per_unit"] = scene.cm_per_unit ? json(*scene.cm_per_unit) : json(nullptr);
+  report["unit_from"] = o.cm_per_unit ? "--scene-scale" : known ? "--known-distance" : "the knowledge stage's estimate (eyes, body length)";
+  if (!scene.cm_per_unit)
+    log::info("prepare: COLMAP's unit is arbitrary and none was given; reconstruct will estimate it from the animal (pass --scene-scale or "
+              "--known-distance for an exact one)");
   write_transforms_json(work / "transforms.json", scene);
   for (const fs::path& scratch : {undistorted, undistorted_masks, mask_input}) fs::remove_all(scratch);
   steps.add("scene", since(start));

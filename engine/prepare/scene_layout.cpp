@@ -83,6 +83,24 @@ SceneLayout find_layout(const std::vector<io::Camera>& cameras, const SparsePoin
   return l;
 }
 
+std::vector<StrayCamera> stray_cameras(const std::vector<io::Camera>& cameras, const SceneLayout& layout) {
+  constexpr double kMaxOffAxisDeg = 35;  // the animal's centre beyond it lies at or outside a phone's frame
+  constexpr double kMaxDistanceRatio = 3;
+  std::vector<StrayCamera> strays;
+  for (std::size_t i = 0; i < cameras.size(); ++i) {
+    const io::Camera& c = cameras[i];
+    const glm::dvec3 to_focus = layout.focus - c.centre(), axis = -glm::normalize(glm::dvec3(c.camera_to_world[2]));
+    const double distance = glm::length(to_focus);
+    const double off_axis = std::acos(std::clamp(glm::dot(to_focus, axis) / std::max(distance, 1e-300), -1.0, 1.0)) * 180 / M_PI;
+    std::string reason;
+    if (off_axis > kMaxOffAxisDeg) reason = "aimed " + std::to_string(std::lround(off_axis)) + " degrees away from the animal";
+    else if (distance > kMaxDistanceRatio * layout.reach || distance * kMaxDistanceRatio < layout.reach)
+      reason = "placed " + std::to_string(distance / layout.reach).substr(0, 4) + " times the other cameras' distance from the animal";
+    if (!reason.empty()) strays.push_back({i, reason});
+  }
+  return strays;
+}
+
 glm::dmat4 upright_transform(const SceneLayout& l) {
   const glm::dvec3 y = glm::normalize(l.up);
   // Any heading will do; COLMAP's x axis laid on the floor keeps it recognisable.

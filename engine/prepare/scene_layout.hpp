@@ -4,6 +4,7 @@
 // arbitrary unit), the floor (the plane most points near the animal lie on), which way is up (the
 // floor's normal, or the cameras' mean up vector: most photos are taken upright), and which points
 // are the animal (above the floor, near the centre) and which the background.
+#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -33,6 +34,15 @@ struct SceneLayout {
 
 // InputError when the cameras' axes are all parallel (no point they aim at).
 SceneLayout find_layout(const std::vector<io::Camera>& cameras, const SparsePoints& points);
+
+// A camera COLMAP placed where no photo of the animal can have been taken: aimed well away from the
+// point the others aim at, or several times nearer or further than the others (a photo matched to
+// the wrong side of a symmetric animal or floor pattern). Such a pose would mislead every stage.
+struct StrayCamera {
+  std::size_t index;
+  std::string reason;
+};
+std::vector<StrayCamera> stray_cameras(const std::vector<io::Camera>& cameras, const SceneLayout& layout);
 
 // The rigid transform that puts the scene upright in nf_gpu's convention: +y up, the origin on the
 // floor under the animal's centre (at the centre when there is no floor). Lengths are kept.

@@ -165,6 +165,20 @@ TEST_CASE("distortion, missing fields and bad poses are refused with the file an
   CHECK_THROWS_WITH_AS(read_scene(dir), doctest::Contains("no scene found"), InputError);
 }
 
+TEST_CASE("COLMAP's project layout: the model in sparse/0, the photos in images/ beside it") {
+  const fs::path dir = fs::temp_directory_path() / "nf_scene_colmap_project";
+  fs::remove_all(dir);
+  fs::create_directories(dir / "sparse" / "0");
+  std::ofstream(dir / "sparse" / "0" / "cameras.txt") << "# a comment\n1 PINHOLE 64 48 300 300 32 24\n";
+  std::ofstream(dir / "sparse" / "0" / "images.txt") << "1 1 0 0 0 0 0 2 1 a.jpg\n\n";
+  const Scene s = read_scene(dir);
+  REQUIRE(s.cameras.size() == 1);
+  CHECK(s.cameras[0].image == dir / "images" / "a.jpg");
+  CHECK(s.cameras[0].centre().z == doctest::Approx(-2.0));  // -R^T t with R = I, t = (0, 0, 2)
+  CHECK(s.cameras[0].mask.empty());
+  fs::remove_all(dir);
+}
+
 TEST_CASE("scene files: missing images, wrong sizes and masks that do not match are named") {
   const fs::path dir = fs::temp_directory_path() / "nf_scene_files";
   fs::remove_all(dir);
