@@ -462,7 +462,8 @@ int main(int argc, char** argv) {
   auto* prepare_from_video = prepare->add_option("--video", prepare_video, "a video circling the animal (any format ffmpeg reads); --frames sharp frames are taken from it");
   prepare_from_images->excludes(prepare_from_video);
   prepare->add_option("--frames", prepare_options.video_frames, "with --video: how many frames to keep, the sharpest of each stretch (default 60)")
-      ->check(CLI::Range(8, 400));
+      ->check(CLI::Range(8, 400))
+      ->needs(prepare_from_video);
   prepare->add_option("--out", prepare_out, "the scene folder to write (must be new)")->required();
   prepare->add_option("--masks", prepare_masks, "one mask per photo (white animal on black), named like the photo; without it, the photos' alpha channel")
       ->check(CLI::ExistingDirectory);

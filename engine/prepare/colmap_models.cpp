@@ -73,7 +73,8 @@ const ColmapModel& choose_colmap_model(const std::vector<ColmapModel>& models, s
         groups += "\n  " + std::to_string(m.images.size()) + " photos (" + some_names(m.images) + "), model " + m.folder.string();
       throw InputError("prepare: COLMAP split the photos into " + std::to_string(models.size()) + " groups that share no features:" + groups +
                        "\nPhotos of two animals (or two sessions) belong in two folders, one prepare each. For one animal, add photos "
-                       "that bridge the groups (overlapping views, the same light), or keep one group: pass its model with --colmap.");
+                       "that bridge the groups (overlapping views, the same light), or keep one group: pass its model with --colmap, the photos with --images (a video's frames are in colmap/frames beside the models) "
+                       "and a new --out.");
     }
     log::warn("prepare: COLMAP found ", models.size(), " groups of photos; the largest (", largest.images.size(), " photos) is kept");
   }

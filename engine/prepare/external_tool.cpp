@@ -89,8 +89,8 @@ double run_tool(const std::string& exe, const std::string& label, const std::vec
   if (out_fd != fd) close(out_fd);
   if (spawned != 0) throw InputError(label + ": cannot start " + exe + " (" + std::strerror(spawned) + ")");
   int status = 0;
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
+  while (waitpid(pid, &status, 0) < 0)
+    if (errno != EINTR) throw InputError(label + ": lost track of " + exe + " (" + std::strerror(errno) + ")");
   const double seconds = clock.seconds();
   const int code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   if (code != 0)

@@ -56,13 +56,24 @@ glm::dvec2 Lens::normalised(const glm::dvec2& pixel) const {
   else throw InputError("--known-distance: the lens model " + model + " is not one prepare can undistort points for (SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV)");
   // COLMAP's pixel centres lie at +0.5; a viewer's (column, row) names the pixel whose centre that is.
   const glm::dvec2 distorted((pixel.x + 0.5 - cx) / fx, (pixel.y + 0.5 - cy) / fy);
-  // Invert COLMAP's distortion by fixed-point iteration (it converges for the mild lenses COLMAP fits).
+  // Invert COLMAP's distortion by Newton's method with a numerical Jacobian, as COLMAP does; a lens
+  // too strong to invert there (a fisheye read as OPENCV) is refused rather than misread.
+  const auto distort = [&](const glm::dvec2& v) {
+    const double r2 = v.x * v.x + v.y * v.y, radial = 1 + k1 * r2 + k2 * r2 * r2;
+    return v * radial + glm::dvec2(2 * p1 * v.x * v.y + p2 * (r2 + 2 * v.x * v.x), p1 * (r2 + 2 * v.y * v.y) + 2 * p2 * v.x * v.y);
+  };
   glm::dvec2 u = distorted;
-  for (int i = 0; i < 50; ++i) {
-    const double r2 = u.x * u.x + u.y * u.y, radial = 1 + k1 * r2 + k2 * r2 * r2;
-    const glm::dvec2 tangential(2 * p1 * u.x * u.y + p2 * (r2 + 2 * u.x * u.x), p1 * (r2 + 2 * u.y * u.y) + 2 * p2 * u.x * u.y);
-    u = (distorted - tangential) / radial;
+  for (int i = 0; i < 100; ++i) {
+    const glm::dvec2 residual = distort(u) - distorted;
+    if (glm::length(residual) < 1e-12) break;
+    const double h = 1e-7 * std::max(1.0, glm::length(u));
+    const glm::dvec2 dx = (distort(u + glm::dvec2(h, 0)) - distort(u - glm::dvec2(h, 0))) / (2 * h);
+    const glm::dvec2 dy = (distort(u + glm::dvec2(0, h)) - distort(u - glm::dvec2(0, h))) / (2 * h);
+    u -= glm::inverse(glm::dmat2(dx, dy)) * residual;
   }
+  if (!std::isfinite(u.x) || !std::isfinite(u.y) || glm::length(distort(u) - distorted) > 1e-9)
+    throw InputError("--known-distance: the lens COLMAP found (" + model + ") cannot be undone at pixel (" + std::to_string(pixel.x) + ", " +
+                     std::to_string(pixel.y) + "); pick the point nearer the photo's centre");
   return u;
 }
 
@@ -112,10 +123,9 @@ json scale_from_known_distance(const KnownDistance& known, const std::map<std::s
     std::vector<Ray> rays;
     for (const auto& [photo, pixel] : known.points[p]) {
       const auto lens = lenses.find(photo);
-      const std::string stem = fs::path(photo).stem().string();
-      const auto camera = std::find_if(cameras.begin(), cameras.end(), [&](const io::Camera& c) { return c.name == stem; });
+      const auto camera = std::find_if(cameras.begin(), cameras.end(), [&](const io::Camera& c) { return c.image.filename() == photo; });
       if (lens == lenses.end() || camera == cameras.end())
-        throw InputError(source + ": points[" + std::to_string(p) + "] names " + photo + ", which is not among the photos COLMAP placed");
+        throw InputError(source + ": points[" + std::to_string(p) + "] names " + photo + ", which is not among the photos COLMAP placed (or whose pose was left out)");
       const glm::dvec2 n = lens->second.normalised(pixel);
       // The same ray through the undistorted pinhole camera.
       const glm::dvec2 undistorted(camera->cx + camera->fx * n.x, camera->cy + camera->fy * n.y);

@@ -148,10 +148,23 @@ json prepare_scene(const PrepareOptions& o) {
   if (o.cm_per_unit && !o.known_distance.empty()) throw UsageError("prepare: --scene-scale and --known-distance both set the unit; give one");
   std::optional<KnownDistance> known;
   if (!o.known_distance.empty()) known = read_known_distance(o.known_distance);
+  // The tools are found before anything runs for minutes.
+  if (o.colmap_model.empty()) colmap_executable();
+  if (from_video) video_tools();
   std::vector<fs::path> photos;
   if (!from_video) {
     photos = list_photos(o.images);
     for (const fs::path& p : photos) io::require_complete_image(p);  // truncated photos are named now, not by COLMAP
+    for (std::size_t i = 0; known && i < known->points.size(); ++i)
+      for (const auto& [name, pixel] : known->points[i]) {
+        const auto photo = std::find_if(photos.begin(), photos.end(), [&](const fs::path& p) { return p.filename() == name; });
+        if (photo == photos.end())
+          throw InputError("--known-distance " + o.known_distance.string() + ": points[" + std::to_string(i) + "] names " + name + ", which is not a photo in " + o.images.string());
+        const auto [w, h] = io::image_size(*photo);
+        if (!(pixel.x >= 0 && pixel.y >= 0 && pixel.x < w && pixel.y < h))
+          throw InputError("--known-distance " + o.known_distance.string() + ": points[" + std::to_string(i) + "][\"" + name + "\"] lies outside the photo (" +
+                           std::to_string(w) + "x" + std::to_string(h) + ")");
+      }
   }
 
   // Masks: the user's, the photos' alpha, or (when a photo has neither) made here once the cameras are known.
@@ -181,8 +194,11 @@ json prepare_scene(const PrepareOptions& o) {
   if (!from_video) refuse_output_inside(out, o.images, "--out", "photos");
   if (!o.masks.empty()) refuse_output_inside(out, o.masks, "--out", "masks");
   const fs::path work = out.parent_path() / (out.filename().string() + ".partial");
-  if (!o.colmap_model.empty() && fs::absolute(o.colmap_model).lexically_normal().string().rfind(work.string() + "/", 0) == 0)
-    throw UsageError("prepare: --colmap " + o.colmap_model.string() + " lies in " + work.string() + ", which this run clears: choose another --out");
+  // Inputs left in an earlier run's scratch folder (a video's frames, COLMAP's models) would be
+  // cleared with it.
+  for (const auto& [input, flag] : {std::pair{o.colmap_model, "--colmap"}, std::pair{o.images, "--images"}, std::pair{o.masks, "--masks"}})
+    if (!input.empty() && (fs::absolute(input).lexically_normal().string() + "/").rfind(work.string() + "/", 0) == 0)
+      throw UsageError(std::string("prepare: ") + flag + " " + input.string() + " lies in " + work.string() + ", which this run clears: choose another --out");
   fs::remove_all(work);
   create_output_folder(work / "colmap", "--out");
   const fs::path log_file = work / "colmap" / "colmap.log";

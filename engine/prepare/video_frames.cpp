@@ -48,7 +48,7 @@ VideoInfo probe(const fs::path& video, const fs::path& scratch, const fs::path& 
   try {
     run_tool(ffprobe, "ffprobe " + video.filename().string(),
              {"-v", "error", "-select_streams", "v:0", "-show_entries",
-              "stream=width,height,nb_frames,avg_frame_rate,duration:stream_side_data=rotation:format=duration", "-of", "json", video.string()},
+              "stream=width,height,nb_frames,avg_frame_rate,r_frame_rate,duration:stream_side_data=rotation:format=duration", "-of", "json", video.string()},
              log, out);
   } catch (const InputError& e) {
     throw InputError("prepare: ffmpeg cannot read " + video.string() + " as a video (not a video, or a damaged one; play it to check, or "
@@ -61,20 +61,30 @@ VideoInfo probe(const fs::path& video, const fs::path& scratch, const fs::path& 
     throw InputError("prepare: " + video.string() + " holds no video stream ffmpeg can read");
   const json& stream = probe["streams"][0];
   VideoInfo info;
-  info.width = std::uint32_t(number_in(stream, "width")), info.height = std::uint32_t(number_in(stream, "height"));
+  // ffprobe's numbers come from the file: bounded before they become counts.
+  const auto count = [](double v) { return std::isfinite(v) && v > 0 ? std::min(v, 1e12) : 0.0; };
+  info.width = std::uint32_t(std::min(count(number_in(stream, "width")), 1e9)), info.height = std::uint32_t(std::min(count(number_in(stream, "height")), 1e9));
   info.duration_s = number_in(stream, "duration");
   if (!(info.duration_s > 0) && probe.contains("format")) info.duration_s = number_in(probe["format"], "duration");
-  info.frame_rate = number_in(stream, "avg_frame_rate");
-  info.frame_count = std::uint64_t(number_in(stream, "nb_frames"));
-  if (info.frame_count == 0) info.frame_count = std::uint64_t(std::floor(info.duration_s * info.frame_rate));
+  info.duration_s = count(info.duration_s);
+  info.frame_rate = count(number_in(stream, "avg_frame_rate"));
+  if (info.frame_rate == 0) info.frame_rate = count(number_in(stream, "r_frame_rate"));
+  info.frame_count = std::uint64_t(count(number_in(stream, "nb_frames")));
+  if (info.frame_count == 0) info.frame_count = std::uint64_t(count(std::floor(info.duration_s * info.frame_rate)));
   if (stream.contains("side_data_list") && stream["side_data_list"].is_array())
-    for (const json& side : stream["side_data_list"]) info.rotation_deg = number_in(side, "rotation");
+    for (const json& side : stream["side_data_list"])
+      if (side.is_object() && side.contains("rotation")) info.rotation_deg = number_in(side, "rotation");
   if (!(info.duration_s > 0) || info.frame_count == 0)
     throw InputError("prepare: " + video.string() + ": ffprobe finds no length or no frames in its video stream (a damaged or unfinished file?)");
   return info;
 }
 
 }  // namespace
+
+void video_tools() {
+  find_tool("ffprobe", "NF_FFPROBE", kInstallHint);
+  find_tool("ffmpeg", "NF_FFMPEG", kInstallHint);
+}
 
 double frame_sharpness(const std::vector<float>& grey, std::uint32_t width, std::uint32_t height) {
   cv::Mat image(int(height), int(width), CV_32F, const_cast<float*>(grey.data()));
@@ -91,6 +101,7 @@ double frame_sharpness(const std::vector<float>& grey, std::uint32_t width, std:
 
 json extract_video_frames(const VideoFrameOptions& o) {
   if (!fs::is_regular_file(o.video)) throw InputError("prepare: --video " + o.video.string() + " is not a file");
+  if (o.frames == 0 || o.candidates_per_frame == 0) throw UsageError("prepare: --frames must be at least 1");
   fs::create_directories(o.out);
   const fs::path candidates = o.out / "candidates";
   fs::create_directories(candidates);
@@ -104,7 +115,7 @@ json extract_video_frames(const VideoFrameOptions& o) {
   char filter[64];
   std::snprintf(filter, sizeof filter, "fps=%.6f", rate);
   const double seconds = run_tool(find_tool("ffmpeg", "NF_FFMPEG", kInstallHint), "ffmpeg " + o.video.filename().string(),
-                                  {"-nostdin", "-v", "error", "-i", o.video.string(), "-vf", filter, "-q:v", "2", (candidates / "%06d.jpg").string()}, o.log);
+                                  {"-nostdin", "-v", "error", "-i", o.video.string(), "-map", "0:v:0", "-vf", filter, "-q:v", "2", (candidates / "%06d.jpg").string()}, o.log);
   std::vector<fs::path> files;
   for (const fs::directory_entry& e : fs::directory_iterator(candidates)) files.push_back(e.path());
   std::sort(files.begin(), files.end());

@@ -19,6 +19,9 @@ struct VideoFrameOptions {
   std::filesystem::path log;        // ffmpeg's output is appended here
 };
 
+// ffprobe and ffmpeg (UsageError saying how to install them when missing).
+void video_tools();
+
 // Returns the report: the video's length and rotation, and each kept frame's time and sharpness.
 // InputError when ffmpeg cannot decode the file or it holds fewer frames than asked for.
 json extract_video_frames(const VideoFrameOptions& options);
