@@ -446,6 +446,13 @@ int main(int argc, char** argv) {
   synth->add_option("--backdrop", synth_options.backdrop,
                     "what surrounds the animal: plain (one flat colour, default) or textured (a patterned floor and wall, as photos taken anywhere but a studio have)")
       ->check(CLI::IsMember(nf::synth::backdrop_names()));
+  synth->add_option("--photo-format", synth_options.photo_format,
+                    "png (lossless, default) or jpeg (quality 92, with a camera's EXIF: maker, model, focal length)")
+      ->check(CLI::IsMember({"png", "jpeg"}));
+  synth->add_option("--path", synth_options.camera_path,
+                    "rings (a rig: two even rings, default) or handheld (a person walking round: uneven steps, heights, distances, aim and roll)")
+      ->check(CLI::IsMember({"rings", "handheld"}));
+  synth->add_option("--blurred-views", synth_options.blurred_views, "this many views (spread evenly) shaken during the exposure (default 0)");
   synth->add_option("--out", synth_out, "output folder (must be new, or an earlier synth scene with --overwrite)")->required();
   synth->add_option("--frame", synth_options.frame,
                     "world frame of the files: y-up-m (default) or z-up-mm (z up, millimetres, metres from the origin); the photos are the same")

@@ -267,7 +267,15 @@ json prepare_scene(const PrepareOptions& o) {
   SceneLayout layout = find_layout(scene.cameras, sparse);
   // Cameras COLMAP put where no photo of the animal was taken are left out (they would mislead the
   // masks and every stage after), then the layout is found again without them.
-  const std::vector<StrayCamera> strays = stray_cameras(scene.cameras, layout);
+  // A video's frames (named in time order) lie on one path: a frame off it is misplaced even when
+  // it aims at the animal.
+  if (from_video) std::sort(scene.cameras.begin(), scene.cameras.end(), [](const io::Camera& a, const io::Camera& b) { return a.name < b.name; });
+  std::vector<StrayCamera> strays = stray_cameras(scene.cameras, layout);
+  if (from_video) {
+    for (const StrayCamera& jump : path_jumps(scene.cameras))
+      if (std::none_of(strays.begin(), strays.end(), [&](const StrayCamera& s) { return s.index == jump.index; })) strays.push_back(jump);
+    std::sort(strays.begin(), strays.end(), [](const StrayCamera& a, const StrayCamera& b) { return a.index < b.index; });
+  }
   report["stray_cameras"] = json::array();
   for (auto stray = strays.rbegin(); stray != strays.rend(); ++stray) {
     const std::string name = scene.cameras[stray->index].image.filename().string();

@@ -101,6 +101,30 @@ std::vector<StrayCamera> stray_cameras(const std::vector<io::Camera>& cameras, c
   return strays;
 }
 
+std::vector<StrayCamera> path_jumps(const std::vector<io::Camera>& in_time_order) {
+  const std::size_t n = in_time_order.size();
+  std::vector<StrayCamera> jumps;
+  if (n < 5) return jumps;
+  const auto centre = [&](std::size_t i) { return in_time_order[i].centre(); };
+  std::vector<double> steps;
+  for (std::size_t i = 1; i < n; ++i) steps.push_back(glm::distance(centre(i), centre(i - 1)));
+  std::nth_element(steps.begin(), steps.begin() + std::ptrdiff_t(steps.size() / 2), steps.end());
+  const double step = steps[steps.size() / 2];
+  if (!(step > 0)) return jumps;
+  const auto describe = [&](double d) { return "off the video's path (a detour of " + std::to_string(d / step).substr(0, 4) + " steps between frames)"; };
+  for (std::size_t i = 0; i < n; ++i) {
+    double detour;
+    if (i == 0 || i + 1 == n) {
+      detour = glm::distance(centre(i), centre(i == 0 ? 1 : n - 2));
+      if (detour > 4 * step) jumps.push_back({i, describe(detour)});
+      continue;
+    }
+    detour = glm::distance(centre(i), centre(i - 1)) + glm::distance(centre(i), centre(i + 1)) - glm::distance(centre(i + 1), centre(i - 1));
+    if (detour > 2 * step) jumps.push_back({i, describe(detour)});
+  }
+  return jumps;
+}
+
 glm::dmat4 upright_transform(const SceneLayout& l) {
   const glm::dvec3 y = glm::normalize(l.up);
   // Any heading will do; COLMAP's x axis laid on the floor keeps it recognisable.

@@ -44,6 +44,12 @@ struct StrayCamera {
 };
 std::vector<StrayCamera> stray_cameras(const std::vector<io::Camera>& cameras, const SceneLayout& layout);
 
+// Frames of a video (in time order) that COLMAP placed off the path the camera took: the detour
+// through a frame, |c - before| + |c - after| - |after - before|, above twice the median step
+// between frames (a smooth path, hand-held too, detours by a small share of a step); the first and
+// last frame when further than four steps from their one neighbour. Indices into `in_time_order`.
+std::vector<StrayCamera> path_jumps(const std::vector<io::Camera>& in_time_order);
+
 // The rigid transform that puts the scene upright in nf_gpu's convention: +y up, the origin on the
 // floor under the animal's centre (at the centre when there is no floor). Lengths are kept.
 glm::dmat4 upright_transform(const SceneLayout& layout);

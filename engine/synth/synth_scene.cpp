@@ -18,6 +18,7 @@
 #include "engine/core/random.hpp"
 #include "engine/geometry/mesh_tools.hpp"
 #include "engine/io/image.hpp"
+#include "engine/io/jpeg_exif.hpp"
 #include "engine/io/mesh.hpp"
 #include "engine/io/scene.hpp"
 #include "engine/io/strand_files.hpp"
@@ -26,6 +27,7 @@
 #include "engine/synth/effective_thickness.hpp"
 #include "engine/synth/fur_envelope.hpp"
 #include "engine/synth/fur_growth.hpp"
+#include "engine/synth/photo_effects.hpp"
 #include "engine/synth/strand_renderer.hpp"
 #include "engine/synth/world_frame.hpp"
 
@@ -68,6 +70,9 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
   if (!(o.hair_width > 0 && o.hair_width <= 100)) throw UsageError("synth: --hair-width must lie in (0, 100], got " + std::to_string(o.hair_width));
   if (!(o.photo_noise >= 0 && o.photo_noise <= 255)) throw UsageError("synth: --noise must lie in [0, 255], got " + std::to_string(o.photo_noise));
   hair_shading_from(o.shading);  // an unknown shading fails before any work
+  if (o.photo_format != "png" && o.photo_format != "jpeg") throw UsageError("synth: --photo-format must be png or jpeg, got " + o.photo_format);
+  if (o.camera_path != "rings" && o.camera_path != "handheld") throw UsageError("synth: --path must be rings or handheld, got " + o.camera_path);
+  if (o.blurred_views > o.views) throw UsageError("synth: --blurred-views " + std::to_string(o.blurred_views) + " is more than the " + std::to_string(o.views) + " views");
   const bool textured_backdrop = backdrop_is_textured(o.backdrop);
   const WorldFrame frame = world_frame(o.frame);
   // "scenes/cat/" and "scenes/./cat" name the same folder; the temp folder sits beside it.
@@ -131,6 +136,7 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
                                                               envelope.mesh.positions[3 * i + 2])));
   RigOptions rig;
   rig.views = o.views, rig.width = rig.height = o.resolution;
+  rig.handheld = o.camera_path == "handheld", rig.seed = o.seed;
   const glm::vec3 up = glm::normalize(glm::vec3(params.animal_to_world * glm::vec4(0, 1, 0, 0)));
   io::Scene scene;
   scene.root = out;
@@ -175,12 +181,21 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
       std::normal_distribution<float> noise(0.f, o.photo_noise / 255.f);
       for (float& v : r.rgb.pixels) v = std::clamp(v + noise(noise_rng), 0.f, 1.f);
     }
-    cam.image = out / "images" / (cam.name + ".png");
+    // The blurred views spread evenly: the middle one of each of `blurred_views` equal runs.
+    if (const std::size_t run = o.blurred_views ? scene.cameras.size() / o.blurred_views : 0; run > 0 && i % run == run / 2 && i / run < o.blurred_views)
+      r.rgb = motion_blur(r.rgb, std::max(3u, o.resolution * 3 / 200));
+    const bool jpeg = o.photo_format == "jpeg";
+    cam.image = out / "images" / (cam.name + (jpeg ? ".jpg" : ".png"));
     cam.mask = out / "masks" / (cam.name + ".png");
     io::Image mask{r.coverage.width, r.coverage.height, 1, std::vector<float>(r.coverage.pixels.size())};
     for (std::size_t p = 0; p < mask.pixels.size(); ++p) mask.pixels[p] = r.coverage.pixels[p] >= 0.5f ? 1.0f : 0.0f;
     for (float c : mask.pixels) coverage_sum += c;
-    io::write_png(cam.image, r.rgb);
+    if (jpeg) {
+      const double focal_mm = cam.fx * 36.0 / double(std::max(cam.width, cam.height));
+      write_file_atomic(cam.image, io::with_exif(io::encode_jpeg(r.rgb, 92), {"nf_gpu", "synth camera", focal_mm, focal_mm}));
+    } else {
+      io::write_png(cam.image, r.rgb);
+    }
     io::write_png(cam.mask, mask);
     if (o.true_orientation) io::write_exr(out / "gt" / "orientation" / (cam.name + ".exr"), r.orientation);
     progress.update(i + 1);
@@ -235,7 +250,7 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
                  {"voxel", envelope.voxel * frame.scale}, {"closing_radius", envelope.closing_radius * frame.scale},
                  {"vertices", envelope.mesh.vertex_count()}}},
       {"render", {{"views", o.views}, {"resolution", o.resolution}, {"samples_per_pixel", o.samples_per_axis * o.samples_per_axis},
-                  {"shading", o.shading}, {"hair_width", o.hair_width}, {"photo_noise", o.photo_noise}, {"backdrop", o.backdrop}, {"true_orientation", o.true_orientation},
+                  {"shading", o.shading}, {"hair_width", o.hair_width}, {"photo_noise", o.photo_noise}, {"backdrop", o.backdrop}, {"photo_format", o.photo_format}, {"true_orientation", o.true_orientation},
                   {"mean_mask_coverage", coverage_sum / (double(o.views) * o.resolution * o.resolution)}}},
   };
   timings["write_s"] = clock.lap();

@@ -37,6 +37,14 @@ struct SynthOptions {
   // What surrounds the animal (backdrop.hpp): "plain" (one flat colour) or "textured" (a patterned
   // floor and wall, for structure-from-motion and for masks no threshold can make).
   std::string backdrop = "plain";
+  // "png" (lossless), or "jpeg": what cameras write (quality 92) with the EXIF a camera adds (maker,
+  // model, focal length in mm and as the 35 mm equivalent of a 36 mm wide sensor), which COLMAP
+  // takes its first focal length from.
+  std::string photo_format = "png";
+  // "rings" (a rig: two even rings) or "handheld" (a person walking round: camera_rig.hpp), and how
+  // many views (spread evenly) are motion-blurred, a sideways shake of 1.5 % of the width.
+  std::string camera_path = "rings";
+  std::uint32_t blurred_views = 0;
   bool overwrite = false;              // replace an existing synth output folder
   // Also write gt/orientation/<camera>.exr: the true on-screen orientation of the strands each pixel
   // shows (strand_renderer.hpp), the reference `nf_gpu orient` judges Gabor maps against.

@@ -13,6 +13,7 @@
 #include "engine/core/error.hpp"
 #include "engine/io/image.hpp"
 #include "engine/io/image_size.hpp"
+#include "engine/io/jpeg_exif.hpp"
 #include "engine/io/mask_agreement.hpp"
 
 using namespace nf;
@@ -53,6 +54,43 @@ TEST_CASE("JPEG decodes to the size and roughly the colour written") {
   CHECK(r.height == 8);
   CHECK(r.at(5, 5, 1) == doctest::Approx(200 / 255.0).epsilon(0.02));
   fs::remove(path);
+}
+
+TEST_CASE("a camera's EXIF in a JPEG: the pixels decode as before, and the tags are where the TIFF layout puts them") {
+  Image img{16, 8, 3, {}};
+  for (std::uint32_t i = 0; i < 16 * 8; ++i) img.pixels.insert(img.pixels.end(), {(i % 16) / 15.f, (i / 16) / 7.f, 0.5f});
+  const std::string plain = encode_jpeg(img, 92);
+  const std::string tagged = with_exif(plain, {"nf_gpu", "synth camera", 24.5, 36.0});
+  // SOI, then APP1 "Exif\0\0", then a little-endian TIFF header pointing at IFD0.
+  REQUIRE(tagged.size() > plain.size());
+  CHECK(std::uint8_t(tagged[2]) == 0xff);
+  CHECK(std::uint8_t(tagged[3]) == 0xe1);
+  CHECK(std::size_t(std::uint8_t(tagged[4])) * 256 + std::uint8_t(tagged[5]) + 2 == tagged.size() - plain.size());
+  CHECK(tagged.compare(6, 6, std::string("Exif\0\0", 6)) == 0);
+  const std::string tiff = tagged.substr(12, tagged.size() - plain.size() - 10);
+  const auto u16 = [&](std::size_t at) { return unsigned(std::uint8_t(tiff[at])) | unsigned(std::uint8_t(tiff[at + 1])) << 8; };
+  const auto u32 = [&](std::size_t at) { return u16(at) | u16(at + 2) << 16; };
+  CHECK(tiff.substr(0, 4) == std::string("II*\0", 4));
+  const std::size_t ifd0 = u32(4);
+  REQUIRE(u16(ifd0) == 3);
+  CHECK(u16(ifd0 + 2) == 0x010f);  // Make, ASCII, at an offset
+  CHECK(tiff.substr(u32(ifd0 + 2 + 8), 7) == std::string("nf_gpu\0", 7));
+  CHECK(u16(ifd0 + 2 + 24) == 0x8769);
+  const std::size_t exif_ifd = u32(ifd0 + 2 + 24 + 8);
+  REQUIRE(u16(exif_ifd) == 2);
+  CHECK(u16(exif_ifd + 2) == 0x920a);  // FocalLength, RATIONAL: 2450 / 100
+  const std::size_t rational = u32(exif_ifd + 2 + 8);
+  CHECK(u32(rational) == 2450);
+  CHECK(u32(rational + 4) == 100);
+  CHECK(u16(exif_ifd + 14) == 0xa405);  // FocalLengthIn35mmFilm, SHORT, inline
+  CHECK(u16(exif_ifd + 14 + 8) == 36);
+  const fs::path a = fs::temp_directory_path() / "nf_test_plain.jpg", b = fs::temp_directory_path() / "nf_test_exif.jpg";
+  std::ofstream(a, std::ios::binary) << plain;
+  std::ofstream(b, std::ios::binary) << tagged;
+  CHECK(read_image(a).pixels == read_image(b).pixels);
+  CHECK(image_size(b) == std::pair<std::uint32_t, std::uint32_t>(16, 8));
+  CHECK_THROWS_AS(with_exif("not a jpeg", {}), InputError);
+  fs::remove(a), fs::remove(b);
 }
 
 TEST_CASE("OpenEXR round-trips float values exactly, one channel or four") {

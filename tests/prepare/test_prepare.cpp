@@ -8,18 +8,23 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <sstream>
 
 #include "engine/core/error.hpp"
 #include "engine/io/image.hpp"
 #include "engine/io/mesh.hpp"
 #include "engine/io/scene.hpp"
+#include "engine/io/jpeg_exif.hpp"
+#include "engine/prepare/colmap_command.hpp"
 #include "engine/prepare/colmap_models.hpp"
 #include "engine/prepare/known_distance.hpp"
 #include "engine/prepare/prepare_scene.hpp"
 #include "engine/prepare/scene_layout.hpp"
+#include "engine/synth/photo_effects.hpp"
 #include "engine/synth/synth_scene.hpp"
 
 namespace fs = std::filesystem;
@@ -117,6 +122,7 @@ struct Fixture {
     truth = io::read_scene(root / "truth");
   }
   ~Fixture() { fs::remove_all(root); }
+  std::string photo(const std::string& stem) const { return stem + truth.cameras.front().image.extension().string(); }  // .png or .jpg
   prepare::PrepareOptions options(const char* out) const {
     prepare::PrepareOptions o;
     o.images = root / "truth" / "images", o.out = root / out;
@@ -170,12 +176,12 @@ TEST_CASE("prepare places every photo of a textured synth scene near the true ca
   prepare::PrepareOptions bad = o;
   bad.images = few, bad.out = f.root / "few_out";
   CHECK_THROWS_WITH_AS(prepare::prepare_scene(bad), doctest::Contains(("0 PNG or JPEG photo(s) in " + few.string() + " (besides 1 other file(s): notes.txt)").c_str()), InputError);
-  for (const char* name : {"000.png", "001.png", "002.png"}) fs::copy_file(o.images / name, few / name);
+  for (const char* stem : {"000", "001", "002"}) fs::copy_file(o.images / f.photo(stem), few / f.photo(stem));
   CHECK_THROWS_WITH_AS(prepare::prepare_scene(bad), doctest::Contains("3 PNG or JPEG photo(s)"), InputError);
   CHECK_THROWS_WITH_AS(prepare::prepare_scene(bad), doctest::Contains("needs at least 8, and a good scene 30-80 photos"), InputError);
-  for (const char* name : {"003.png", "004.png", "005.png", "006.png", "007.png"}) fs::copy_file(o.images / name, few / name);
+  for (const char* stem : {"003", "004", "005", "006", "007"}) fs::copy_file(o.images / f.photo(stem), few / f.photo(stem));
   bad.masks = f.root / "truth" / "gt";
-  CHECK_THROWS_WITH_AS(prepare::prepare_scene(bad), doctest::Contains("no mask for 000.png"), InputError);
+  CHECK_THROWS_WITH_AS(prepare::prepare_scene(bad), doctest::Contains(("no mask for " + f.photo("000")).c_str()), InputError);
   bad.masks = o.masks;
   setenv("NF_COLMAP", (f.root / "no-colmap").c_str(), 1);
   CHECK_THROWS_WITH_AS(prepare::prepare_scene(bad), doctest::Contains("NF_COLMAP names"), UsageError);
@@ -322,23 +328,6 @@ TEST_CASE("COLMAP models: the largest is kept; two groups of like size are photo
   fs::remove_all(sparse);
 }
 
-namespace {
-
-// A horizontal motion blur of `length` pixels: the camera moving sideways during the exposure.
-io::Image motion_blur(const io::Image& image, int length) {
-  io::Image out = image;
-  for (std::uint32_t y = 0; y < image.height; ++y)
-    for (std::uint32_t x = 0; x < image.width; ++x)
-      for (std::uint32_t c = 0; c < image.channels; ++c) {
-        float sum = 0;
-        for (int d = -length / 2; d <= length / 2; ++d) sum += image.at(std::uint32_t(std::clamp(int(x) + d, 0, int(image.width) - 1)), y, c);
-        out.pixels[(std::size_t(y) * image.width + x) * image.channels + c] = sum / float(length / 2 * 2 + 1);
-      }
-  return out;
-}
-
-}  // namespace
-
 TEST_CASE("prepare --video: the sharp frames of a phone video, upright, placed near the true cameras; an undecodable video is named") {
   const Fixture& f = fixture();
   // The views in order, each as three frames (blurred, sharp, blurred) at 12 frames a second, stored
@@ -347,7 +336,7 @@ TEST_CASE("prepare --video: the sharp frames of a phone video, upright, placed n
   fs::create_directories(sequence);
   constexpr int kFramesPerView = 3, kRate = 12;
   for (std::size_t i = 0; i < f.truth.cameras.size(); ++i) {
-    const io::Image sharp = io::read_image(f.truth.cameras[i].image), blurred = motion_blur(sharp, 15);
+    const io::Image sharp = io::read_image(f.truth.cameras[i].image), blurred = synth::motion_blur(sharp, 15);
     for (int k = 0; k < kFramesPerView; ++k) {
       char name[32];
       std::snprintf(name, sizeof name, "%05zu.png", kFramesPerView * i + std::size_t(k));
@@ -367,7 +356,6 @@ TEST_CASE("prepare --video: the sharp frames of a phone video, upright, placed n
   CHECK(std::abs(v["rotation_deg"].get<double>()) == 90);
   CHECK(v["blurred_frames"].empty());
   CHECK(report["matching"] == "exhaustive");
-  CHECK(report["placed"] == f.truth.cameras.size());
   // Each kept frame must be a sharp one; it stands for the view it shows.
   io::Scene truth = f.truth;
   std::map<std::string, io::Camera> by_frame;
@@ -384,11 +372,14 @@ TEST_CASE("prepare --video: the sharp frames of a phone video, upright, placed n
   const Agreement a = compare(prepared, truth, f.root / "truth");
   MESSAGE("video: worst rotation error ", a.worst_angle_deg, " deg, worst centre error ", 100 * a.worst_centre, " % of the radius (", a.worst_camera, "), mask IoU median ",
           a.median_iou, "; ", report["seconds"].dump());
-  // COLMAP places one video frame of 36 wrongly in some runs (0.9-2.7 radii off, measured in 2 of 4
-  // runs; never a photo of the same views): all but two frames must be within the photos' bounds.
+  // COLMAP places one video frame of 36 off the path in some runs (0.9-2.7 radii off in 2 of 4 runs;
+  // never a photo of the same views): prepare leaves such a frame out (path_jumps), and every frame
+  // kept must be within the photos' bounds (a frame turned a quarter would be 90 degrees off).
+  CHECK(report["placed"].get<std::size_t>() + report["stray_cameras"].size() == f.truth.cameras.size());
+  CHECK(report["stray_cameras"].size() <= 2);
   std::size_t close = 0;
   for (std::size_t i = 0; i < a.centres.size(); ++i) close += a.angles_deg[i] < 1.0 && a.centres[i] < 0.04;
-  CHECK(close + 2 >= prepared.cameras.size());  // a frame turned a quarter would be 90 degrees off
+  CHECK(close + 1 >= prepared.cameras.size());
   CHECK(a.up_error_deg < 1.0);
   CHECK(fs::exists(o.out / "colmap" / "frames" / "frame_0001.jpg"));
 
@@ -423,6 +414,22 @@ TEST_CASE("stray cameras: a pose aimed away from the animal, or far from the oth
   CHECK(strays[0].reason.find("degrees away from the animal") != std::string::npos);
   CHECK(strays[1].index == 13);
   CHECK(strays[1].reason.find("times the other cameras' distance") != std::string::npos);
+
+  // A hand-held video's path: 40 frames round the circle with a jitter of a third of a step, then
+  // one frame moved a third of the radius off it (as COLMAP misplaced one in some runs).
+  std::vector<io::Camera> path;
+  for (int i = 0; i < 40; ++i) {
+    const double a = i * 2 * M_PI / 48, jitter = 0.33 * 2 * (2 * M_PI / 48) * std::sin(7.3 * i);
+    path.push_back(camera_at({(2 + jitter) * std::cos(a), 0.5 + 0.5 * jitter, (2 - jitter) * std::sin(a)}, {0, 0, 0}));
+  }
+  CHECK(prepare::path_jumps(path).empty());
+  path[17] = camera_at(path[17].centre() + glm::dvec3(0, 0.6, 0.3), {0, 0, 0});
+  path[39] = camera_at(path[39].centre() * 1.8, {0, 0, 0});
+  const auto jumps = prepare::path_jumps(path);
+  REQUIRE(jumps.size() == 2);
+  CHECK(jumps[0].index == 17);
+  CHECK(jumps[0].reason.find("off the video's path") != std::string::npos);
+  CHECK(jumps[1].index == 39);
 }
 
 TEST_CASE("known distance: COLMAP's lens distortion is undone exactly, a lens that cannot be undone is refused") {
@@ -442,4 +449,38 @@ TEST_CASE("known distance: COLMAP's lens distortion is undone exactly, a lens th
   check_round_trip({"SIMPLE_RADIAL", {440, 160, 160, 0.0003}}, 440, 440, 160, 160, 0.0003, 0, 0, 0);
   CHECK_THROWS_WITH_AS(prepare::Lens({"OPENCV", {100, 100, 50, 50, -2.0, 0, 0, 0}}).normalised({99, 99}), doctest::Contains("cannot be undone"), InputError);
   CHECK_THROWS_WITH_AS(prepare::Lens({"FISHEYE", {100, 50, 50, 0.1}}).normalised({9, 9}), doctest::Contains("not one prepare can undistort"), InputError);
+}
+
+TEST_CASE("a camera's EXIF in a JPEG gives COLMAP its first focal length") {
+  // The same photo as a JPEG with and without a camera's EXIF (synth --photo-format jpeg): COLMAP's
+  // feature extractor (one camera per photo) starts the first from the EXIF focal length, within the
+  // rounding of a whole 35 mm-equivalent millimetre, and guesses 1.2 times the width for the other.
+  const Fixture& f = fixture();
+  const io::Camera& truth = f.truth.cameras.front();
+  const fs::path dir = f.root / "exif";
+  fs::create_directories(dir / "photos");
+  const std::string jpeg = io::encode_jpeg(io::read_image(truth.image), 92);
+  const double focal_mm = truth.fx * 36.0 / double(std::max(truth.width, truth.height));
+  std::ofstream(dir / "photos" / "a_exif.jpg", std::ios::binary) << io::with_exif(jpeg, {"nf_gpu", "synth camera", focal_mm, focal_mm});
+  std::ofstream(dir / "photos" / "b_plain.jpg", std::ios::binary) << jpeg;
+  const fs::path log = dir / "colmap.log";
+  prepare::run_colmap("feature_extractor", {"--database_path", (dir / "database.db").string(), "--image_path", (dir / "photos").string(),
+                                           "--ImageReader.camera_model", "SIMPLE_RADIAL", "--SiftExtraction.use_gpu", "0",
+                                           "--SiftExtraction.max_num_features", "256"},
+                      log);
+  std::ifstream in(log);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::map<std::string, double> focal;  // by photo name
+  for (std::size_t at = text.find("Name:"); at != std::string::npos; at = text.find("Name:", at + 1)) {
+    std::istringstream words(text.substr(at + 5, 64));
+    std::string name;
+    words >> name;
+    const std::size_t f_at = text.find("Focal Length:", at);
+    REQUIRE(f_at != std::string::npos);
+    focal[name] = std::atof(text.c_str() + f_at + std::strlen("Focal Length:"));
+  }
+  REQUIRE(focal.size() == 2);
+  MESSAGE("COLMAP's first focal length: ", focal["a_exif.jpg"], " px with EXIF, ", focal["b_plain.jpg"], " px without; the truth's ", truth.fx);
+  CHECK(focal["a_exif.jpg"] == doctest::Approx(truth.fx).epsilon(0.05));
+  CHECK(focal["b_plain.jpg"] == doctest::Approx(1.2 * truth.width).epsilon(0.01));
 }

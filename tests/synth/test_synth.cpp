@@ -23,6 +23,7 @@
 #include "engine/io/scene.hpp"
 #include "engine/io/strand_files.hpp"
 #include "engine/knowledge/knowledge.hpp"
+#include "engine/synth/camera_rig.hpp"
 #include "engine/synth/fur_growth.hpp"
 #include "engine/synth/strand_renderer.hpp"
 #include "engine/synth/synth_scene.hpp"
@@ -390,6 +391,61 @@ TEST_CASE("the photos' look: shading models, hair width and sensor noise change 
   CHECK(std::sqrt(sq / double(n)) * 255 == doctest::Approx(6.0).epsilon(0.15));
   CHECK(io::read_image(root / "clean" / "masks" / "000.png").pixels == io::read_image(root / "noisy" / "masks" / "000.png").pixels);
   o.photo_noise = -1;
+  CHECK_THROWS_AS(synth::synthesize_scene(root / "bad", o), UsageError);
+  fs::remove_all(root);
+}
+
+TEST_CASE("a person's photos: a hand-held path that still frames the animal, JPEGs with EXIF, shaken views") {
+  // The rig and the hand-held path around the same sphere: every hand-held view still holds the
+  // sphere's centre well inside its frame, and no two hand-held steps are alike as the rig's are.
+  synth::RigOptions rig;
+  rig.views = 24, rig.width = rig.height = 200;
+  const std::vector<io::Camera> rings = synth::camera_rings({0, 0.3f, 0}, 0.5f, {0, 1, 0}, rig);
+  rig.handheld = true;
+  const std::vector<io::Camera> walk = synth::camera_rings({0, 0.3f, 0}, 0.5f, {0, 1, 0}, rig);
+  REQUIRE(walk.size() == rings.size());
+  double largest_roll = 0, step_spread = 0;
+  for (std::size_t i = 0; i < walk.size(); ++i) {
+    const glm::dvec3 p = walk[i].project({0, 0.3, 0});
+    CHECK(p.z > 0);
+    CHECK(std::abs(p.x - 100) < 30);
+    CHECK(std::abs(p.y - 100) < 30);
+    // Roll: the camera's x axis leaves the horizontal plane.
+    largest_roll = std::max(largest_roll, std::abs(std::asin(glm::dvec3(walk[i].camera_to_world[0]).y)) * 180 / M_PI);
+    if (i > 0 && i < 12)
+      step_spread = std::max(step_spread, std::abs(glm::distance(walk[i].centre(), walk[i - 1].centre()) - glm::distance(rings[i].centre(), rings[i - 1].centre())));
+  }
+  CHECK(largest_roll > 1.0);
+  CHECK(largest_roll <= 5.0 + 1e-9);
+  CHECK(step_spread > 0.05 * glm::distance(rings[1].centre(), rings[0].centre()));
+
+  // JPEG photos with a camera's EXIF, two of six views shaken: the shaken ones are the blurrier.
+  const fs::path root = fs::temp_directory_path() / "nf_synth_person_test";
+  fs::remove_all(root);
+  synth::SynthOptions o;
+  o.animal = "dog", o.views = 6, o.resolution = 96, o.strands = 3000, o.samples_per_axis = 1, o.body_voxel = 0.01f;
+  o.backdrop = "textured", o.photo_format = "jpeg", o.camera_path = "handheld", o.blurred_views = 2;
+  const json info = synth::synthesize_scene(root, o);
+  CHECK(info["render"]["photo_format"] == "jpeg");
+  const io::Scene scene = io::read_scene(root);
+  REQUIRE(scene.cameras.size() == 6);
+  std::vector<double> detail;
+  for (const io::Camera& c : scene.cameras) {
+    CHECK(c.image.extension() == ".jpg");
+    std::ifstream in(c.image, std::ios::binary);
+    std::string head(64, '\0');
+    in.read(head.data(), 64);
+    CHECK(head.find(std::string("Exif\0\0", 6)) != std::string::npos);
+    const io::Image photo = io::read_image(c.image);
+    double sum = 0;  // horizontal detail: what a sideways shake removes
+    for (std::uint32_t y = 0; y < photo.height; ++y)
+      for (std::uint32_t x = 1; x < photo.width; ++x) sum += std::abs(photo.at(x, y, 1) - photo.at(x - 1, y, 1));
+    detail.push_back(sum);
+  }
+  // Views 1 and 4 (the middle of each run of three) are shaken.
+  for (const std::size_t shaken : {1, 4})
+    for (const std::size_t sharp : {0, 2, 3, 5}) CHECK(detail[shaken] < 0.8 * detail[sharp]);
+  o.camera_path = "drone";
   CHECK_THROWS_AS(synth::synthesize_scene(root / "bad", o), UsageError);
   fs::remove_all(root);
 }
