@@ -118,7 +118,7 @@ json scale_from_known_distance(const KnownDistance& known, const std::map<std::s
       std::string photo;
       const io::Camera* camera;
       glm::dvec3 origin, direction;
-      glm::dvec2 picked;
+      glm::dvec2 undistorted;  // the pick in the undistorted pinhole camera
     };
     std::vector<Ray> rays;
     for (const auto& [photo, pixel] : known.points[p]) {
@@ -130,7 +130,7 @@ json scale_from_known_distance(const KnownDistance& known, const std::map<std::s
       // The same ray through the undistorted pinhole camera.
       const glm::dvec2 undistorted(camera->cx + camera->fx * n.x, camera->cy + camera->fy * n.y);
       const glm::dvec3 origin = camera->centre();
-      rays.push_back({photo, &*camera, origin, glm::normalize(camera->unproject(undistorted, 1.0) - origin), pixel});
+      rays.push_back({photo, &*camera, origin, glm::normalize(camera->unproject(undistorted, 1.0) - origin), undistorted});
     }
     double widest = 0;
     for (const Ray& r : rays)
@@ -154,9 +154,7 @@ json scale_from_known_distance(const KnownDistance& known, const std::map<std::s
       std::vector<double> errors;
       for (const Ray& r : rays) {
         const glm::dvec3 projected = r.camera->project(x);
-        const glm::dvec2 n = lenses.at(r.photo).normalised(r.picked);
-        const glm::dvec2 picked(r.camera->cx + r.camera->fx * n.x, r.camera->cy + r.camera->fy * n.y);
-        errors.push_back(projected.z > 0 ? glm::length(glm::dvec2(projected) - picked) : 1e9);
+        errors.push_back(projected.z > 0 ? glm::length(glm::dvec2(projected) - r.undistorted) : 1e9);
       }
       return std::pair(x, errors);
     };
