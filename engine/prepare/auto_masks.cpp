@@ -225,32 +225,43 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
     each_view(hull_cut);
   }
   voxels = carve();
-  // A cut that lost the animal (a view whose seeds and colours misled the graph cut) takes the
-  // hull the other views agree on instead, and is named.
-  std::vector<double> shares(views);
-  for (std::size_t i = 0; i < views; ++i) shares[i] = double(cv::countNonZero(cut[i])) / double(cut[i].total());
-  std::vector<double> sorted_shares = shares;
-  std::nth_element(sorted_shares.begin(), sorted_shares.begin() + std::ptrdiff_t(views / 2), sorted_shares.end());
-  std::vector<std::string> replaced;
-  for (std::size_t i = 0; i < views; ++i)
-    if (shares[i] < 0.3 * sorted_shares[views / 2] && cv::countNonZero(hull_masks[i]) > 0) {
+  // The hull drawn back is a little fat (discs, voxels), so a view is judged against the others:
+  // its agreement with the hull against the views' median.
+  const auto hull_agreement = [&](std::size_t i) {
+    const double either = double(cv::countNonZero(cut[i] | hull_masks[i]));
+    return either > 0 ? double(cv::countNonZero(cut[i] & hull_masks[i])) / either : 0.0;
+  };
+  const auto median_of = [&](std::vector<double> values) {
+    std::nth_element(values.begin(), values.begin() + std::ptrdiff_t(views / 2), values.end());
+    return values[views / 2];
+  };
+  std::vector<double> shares(views), agreement(views);
+  for (std::size_t i = 0; i < views; ++i) shares[i] = double(cv::countNonZero(cut[i])) / double(cut[i].total()), agreement[i] = hull_agreement(i);
+  const double median_share = median_of(shares), median_agreement = median_of(agreement);
+  // A cut that lost the animal, or caught something else (a view whose seeds and colours misled the
+  // graph cut: its agreement with the hull the other views share far below theirs), is cut again
+  // from that hull alone; if that cut fails too, the hull itself is taken. Either way it is named.
+  std::vector<std::string> recut, replaced;
+  for (std::size_t i = 0; i < views; ++i) {
+    if (cv::countNonZero(hull_masks[i]) == 0 || (shares[i] >= 0.3 * median_share && agreement[i] >= 0.5 * median_agreement)) continue;
+    labels[i].setTo(cv::Scalar(cv::GC_PR_BGD));
+    cut[i] = hull_masks[i].clone();
+    hull_cut(i);
+    if (hull_agreement(i) < 0.5 * median_agreement) {
       cut[i] = hull_masks[i].clone();
       replaced.push_back(scene.cameras[i].name);
+    } else {
+      recut.push_back(scene.cameras[i].name);
     }
+    agreement[i] = hull_agreement(i);
+  }
+  report["recut_from_hull"] = recut;
   report["replaced_by_hull"] = replaced;
-  if (!replaced.empty()) log::warn("prepare: ", replaced.size(), " automatic mask(s) lost the animal and take the other views' hull instead: ", replaced.front(), replaced.size() > 1 ? ", ..." : "");
+  if (!recut.empty() || !replaced.empty())
+    log::warn("prepare: ", recut.size() + replaced.size(), " automatic mask(s) lost the animal and were made again from the other views' hull: ",
+              recut.empty() ? replaced.front() : recut.front(), recut.size() + replaced.size() > 1 ? ", ..." : "");
   report["hull_voxels"] = voxels;
   report["hull_voxel_size"] = side;
-  // The hull drawn back is a little fat (discs, voxels), so a view is judged against the others:
-  // flagged when its agreement with the hull falls well below the views' median.
-  std::vector<double> agreement(views);
-  for (std::size_t i = 0; i < views; ++i) {
-    const double both = double(cv::countNonZero(cut[i] & hull_masks[i])), either = double(cv::countNonZero(cut[i] | hull_masks[i]));
-    agreement[i] = either > 0 ? both / either : 0.0;
-  }
-  std::vector<double> sorted = agreement;
-  std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(views / 2), sorted.end());
-  const double median_agreement = sorted[views / 2];
   report["median_hull_iou"] = median_agreement;
   json per_view = json::array();
   std::vector<std::string> flagged;
@@ -258,7 +269,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
     const io::Camera& c = scene.cameras[i];
     per_view.push_back({{"view", c.name}, {"animal_share", double(cv::countNonZero(cut[i])) / double(cut[i].total())}, {"hull_iou", agreement[i]},
                         {"floor_pixels", floor_pixels[i]}, {"off_floor_pixels", off_floor_pixels[i]}});
-    if (agreement[i] < median_agreement - 0.08) flagged.push_back(c.name);
+    if (agreement[i] < median_agreement - 0.08) flagged.push_back(c.name);  // well below the views' median
     std::vector<std::uint8_t> mask(std::size_t(c.width) * c.height);
     for (std::uint32_t y = 0; y < c.height; ++y)
       for (std::uint32_t x = 0; x < c.width; ++x) mask[std::size_t(y) * c.width + x] = cut[i].at<std::uint8_t>(int(y), int(x)) ? 1 : 0;
