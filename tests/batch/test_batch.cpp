@@ -35,6 +35,7 @@ fs::path fresh(const std::string& name) {
   const fs::path dir = fs::temp_directory_path() / ("nf_test_batch_" + name + "_" + std::to_string(getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
+  nf::test::remove_at_exit(dir);
   return dir;
 }
 

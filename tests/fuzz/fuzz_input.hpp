@@ -24,12 +24,14 @@
 #include <vector>
 
 #include "engine/io/npz.hpp"
+#include "tests/support/files.hpp"
 
 namespace nf::fuzz {
 
 inline std::filesystem::path input_file(const std::uint8_t* data, std::size_t size, const std::string& extension) {
   const auto path = std::filesystem::temp_directory_path() / ("nf_fuzz_" + std::to_string(getpid()) + extension);
   std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(data), std::streamsize(size));
+  test::remove_at_exit(path);
   return path;
 }
 
@@ -38,6 +40,7 @@ inline std::filesystem::path input_folder(const std::string& name) {
   const auto dir = std::filesystem::temp_directory_path() / ("nf_fuzz_" + std::to_string(getpid()) + "_" + name);
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
+  test::remove_at_exit(dir);
   return dir;
 }
 
