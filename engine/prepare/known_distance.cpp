@@ -77,19 +77,24 @@ glm::dvec2 Lens::normalised(const glm::dvec2& pixel) const {
   return u;
 }
 
-std::map<std::string, Lens> read_lenses(const fs::path& text_model) {
+std::map<long long, Lens> read_colmap_cameras(const fs::path& cameras_txt) {
   std::map<long long, Lens> by_id;
-  std::ifstream cameras(text_model / "cameras.txt"), images(text_model / "images.txt");
+  std::ifstream cameras(cameras_txt);
   for (std::string line; std::getline(cameras, line);) {
     if (line.empty() || line[0] == '#') continue;
     std::istringstream words(line);
     long long id;
     Lens lens;
-    std::uint64_t w, h;
-    words >> id >> lens.model >> w >> h;
+    words >> id >> lens.model >> lens.width >> lens.height;
     for (double x; words >> x;) lens.params.push_back(x);
     by_id[id] = lens;
   }
+  return by_id;
+}
+
+std::map<std::string, Lens> read_lenses(const fs::path& text_model) {
+  const std::map<long long, Lens> by_id = read_colmap_cameras(text_model / "cameras.txt");
+  std::ifstream images(text_model / "images.txt");
   std::map<std::string, Lens> lenses;
   bool pose_line = true;
   for (std::string line; std::getline(images, line);) {
@@ -104,7 +109,7 @@ std::map<std::string, Lens> read_lenses(const fs::path& text_model) {
     std::string name;
     if (!(words >> image_id >> q[0] >> q[1] >> q[2] >> q[3] >> q[4] >> q[5] >> q[6] >> camera_id >> name)) continue;
     pose_line = false;
-    if (by_id.count(camera_id)) lenses[name] = by_id[camera_id];
+    if (const auto lens = by_id.find(camera_id); lens != by_id.end()) lenses[name] = lens->second;
   }
   return lenses;
 }

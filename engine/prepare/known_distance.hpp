@@ -8,6 +8,7 @@
 // row from the top-left corner; the lens distortion COLMAP found is taken out here):
 //   {"cm": 30, "points": [{"IMG_0001.jpg": [812, 1400], "IMG_0007.jpg": [640, 1388]},
 //                         {"IMG_0001.jpg": [1630, 1422], "IMG_0009.jpg": [1210, 1451]}]}
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -36,7 +37,11 @@ struct Lens {
   // The normalised, undistorted image coordinates (x right, y down, z = 1) of a pixel. InputError
   // for a model other than SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL and OPENCV.
   glm::dvec2 normalised(const glm::dvec2& pixel) const;
+  std::uint64_t width = 0, height = 0;  // the photos' size in pixels
 };
+
+// Each camera's lens, by COLMAP's camera id, from a text model's cameras.txt.
+std::map<long long, Lens> read_colmap_cameras(const std::filesystem::path& cameras_txt);
 
 // Each photo's lens, by photo name, from a text model (cameras.txt and images.txt).
 std::map<std::string, Lens> read_lenses(const std::filesystem::path& text_model);

@@ -95,18 +95,8 @@ void write_outline_preview(const fs::path& file, io::Image photo, const std::vec
 // cameras.txt's cameras: model, size and parameters (focal lengths, principal point, distortion).
 json camera_lines(const fs::path& file) {
   json cameras = json::array();
-  std::ifstream in(file);
-  for (std::string line; std::getline(in, line);) {
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream words(line);
-    long long id;
-    std::string model;
-    std::uint64_t width = 0, height = 0;
-    words >> id >> model >> width >> height;
-    std::vector<double> params;
-    for (double x; words >> x;) params.push_back(x);
-    cameras.push_back({{"model", model}, {"width", width}, {"height", height}, {"params", params}});
-  }
+  for (const auto& [id, lens] : read_colmap_cameras(file))
+    cameras.push_back({{"model", lens.model}, {"width", lens.width}, {"height", lens.height}, {"params", lens.params}});
   return cameras;
 }
 
