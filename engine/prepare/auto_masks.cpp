@@ -53,6 +53,39 @@ void graph_cut(const cv::Mat& photo, cv::Mat& labels, std::uint32_t iterations, 
   }
 }
 
+// The largest 26-connected cluster of the marked cells of a grid (x fastest, then y, then z).
+std::vector<char> largest_component(const std::vector<char>& marked, const glm::uvec3& cells) {
+  std::vector<int> component(marked.size(), -1);
+  std::vector<std::size_t> sizes;
+  std::vector<std::size_t> stack;
+  const std::size_t nx = cells.x, ny = cells.y, nz = cells.z;
+  for (std::size_t seed = 0; seed < marked.size(); ++seed) {
+    if (!marked[seed] || component[seed] >= 0) continue;
+    const int label = int(sizes.size());
+    std::size_t size = 0;
+    component[seed] = label;
+    stack.push_back(seed);
+    while (!stack.empty()) {
+      const std::size_t k = stack.back();
+      stack.pop_back();
+      ++size;
+      const std::size_t x = k % nx, y = (k / nx) % ny, z = k / (nx * ny);
+      for (std::size_t cz = z ? z - 1 : 0; cz <= std::min(z + 1, nz - 1); ++cz)
+        for (std::size_t cy = y ? y - 1 : 0; cy <= std::min(y + 1, ny - 1); ++cy)
+          for (std::size_t cx = x ? x - 1 : 0; cx <= std::min(x + 1, nx - 1); ++cx) {
+            const std::size_t n = (cz * ny + cy) * nx + cx;
+            if (marked[n] && component[n] < 0) component[n] = label, stack.push_back(n);
+          }
+    }
+    sizes.push_back(size);
+  }
+  std::vector<char> largest(marked.size(), 0);
+  if (sizes.empty()) return largest;
+  const int best = int(std::max_element(sizes.begin(), sizes.end()) - sizes.begin());
+  for (std::size_t k = 0; k < marked.size(); ++k) largest[k] = component[k] == best;
+  return largest;
+}
+
 }  // namespace
 
 AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, const SceneLayout& layout, const AutoMaskOptions& o) {
@@ -70,7 +103,10 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   report["floor_found"] = has_floor;
   report["floor_points"] = layout.floor_points;
   report["animal_points"] = animal_points.size();
-  if (animal_points.size() < 20)
+  // The points bound the animal's box and seed its likely pixels; with a floor, the floor's evidence
+  // (what the other views see on it) finds the rest, so fewer will do.
+  const std::size_t needed = has_floor ? 10 : 20;
+  if (animal_points.size() < needed)
     throw InputError("prepare: only " + std::to_string(animal_points.size()) + " sparse points stand above the floor near where the cameras aim, too few to say "
                      "where the animal is; pass --masks DIR (one mask per photo) or take the photos closer, around the animal");
   if (!has_floor) log::warn("prepare: no floor found among the sparse points; the automatic masks rely on the animal's distance from the cameras alone");
@@ -175,9 +211,12 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
         kept[k] = seen >= 3 && misses <= std::max<std::size_t>(1, seen / 5);
       }
     });
+    // The animal is one solid: a cluster of voxels apart from the largest is where a few views' cuts
+    // took the same patch of wall or floor, and drawn back it would hold that patch in their masks.
+    const std::vector<char> animal_voxels = largest_component(kept, cells);
     std::vector<glm::dvec3> voxels;
     for (std::size_t k = 0; k < total; ++k)
-      if (kept[k])
+      if (animal_voxels[k])
         voxels.push_back(voxel_centre(k));
     parallel_for(views, [&](std::size_t i0, std::size_t i1) {
       for (std::size_t i = i0; i < i1; ++i) {
