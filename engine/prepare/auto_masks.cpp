@@ -53,12 +53,20 @@ void graph_cut(const cv::Mat& photo, cv::Mat& labels, std::uint32_t iterations, 
   }
 }
 
-// The largest 26-connected cluster of the marked cells of a grid (x fastest, then y, then z).
-std::vector<char> largest_component(const std::vector<char>& marked, const glm::uvec3& cells) {
+// The 26-connected clusters of the marked cells of a grid (x fastest, then y, then z) that hold the
+// animal: each holding at least a fifth of the animal's sparse points that fall in (or next to) a
+// marked cell, the cells given by `animal_cells`; the largest cluster when none falls near one.
+std::vector<char> animal_components(const std::vector<char>& marked, const glm::uvec3& cells, const std::vector<std::size_t>& animal_cells) {
   std::vector<int> component(marked.size(), -1);
   std::vector<std::size_t> sizes;
   std::vector<std::size_t> stack;
   const std::size_t nx = cells.x, ny = cells.y, nz = cells.z;
+  const auto each_neighbour = [&](std::size_t k, const auto& visit) {
+    const std::size_t x = k % nx, y = (k / nx) % ny, z = k / (nx * ny);
+    for (std::size_t cz = z ? z - 1 : 0; cz <= std::min(z + 1, nz - 1); ++cz)
+      for (std::size_t cy = y ? y - 1 : 0; cy <= std::min(y + 1, ny - 1); ++cy)
+        for (std::size_t cx = x ? x - 1 : 0; cx <= std::min(x + 1, nx - 1); ++cx) visit((cz * ny + cy) * nx + cx);
+  };
   for (std::size_t seed = 0; seed < marked.size(); ++seed) {
     if (!marked[seed] || component[seed] >= 0) continue;
     const int label = int(sizes.size());
@@ -69,21 +77,28 @@ std::vector<char> largest_component(const std::vector<char>& marked, const glm::
       const std::size_t k = stack.back();
       stack.pop_back();
       ++size;
-      const std::size_t x = k % nx, y = (k / nx) % ny, z = k / (nx * ny);
-      for (std::size_t cz = z ? z - 1 : 0; cz <= std::min(z + 1, nz - 1); ++cz)
-        for (std::size_t cy = y ? y - 1 : 0; cy <= std::min(y + 1, ny - 1); ++cy)
-          for (std::size_t cx = x ? x - 1 : 0; cx <= std::min(x + 1, nx - 1); ++cx) {
-            const std::size_t n = (cz * ny + cy) * nx + cx;
-            if (marked[n] && component[n] < 0) component[n] = label, stack.push_back(n);
-          }
+      each_neighbour(k, [&](std::size_t n) {
+        if (marked[n] && component[n] < 0) component[n] = label, stack.push_back(n);
+      });
     }
     sizes.push_back(size);
   }
-  std::vector<char> largest(marked.size(), 0);
-  if (sizes.empty()) return largest;
-  const int best = int(std::max_element(sizes.begin(), sizes.end()) - sizes.begin());
-  for (std::size_t k = 0; k < marked.size(); ++k) largest[k] = component[k] == best;
-  return largest;
+  std::vector<char> kept(marked.size(), 0);
+  if (sizes.empty()) return kept;
+  // Sparse points lie on the fur's surface, at or just outside the hull: a point counts for the
+  // cluster of its cell, or of a marked neighbour.
+  std::vector<std::size_t> points(sizes.size(), 0);
+  std::size_t placed = 0;
+  for (const std::size_t cell : animal_cells) {
+    int found = component[cell];
+    if (found < 0) each_neighbour(cell, [&](std::size_t n) { found = found < 0 ? component[n] : found; });
+    if (found >= 0) ++points[std::size_t(found)], ++placed;
+  }
+  std::vector<char> chosen(sizes.size(), 0);
+  if (placed == 0) chosen[std::size_t(std::max_element(sizes.begin(), sizes.end()) - sizes.begin())] = 1;
+  for (std::size_t c = 0; c < sizes.size(); ++c) chosen[c] |= placed > 0 && 5 * points[c] >= placed;
+  for (std::size_t k = 0; k < marked.size(); ++k) kept[k] = component[k] >= 0 && chosen[std::size_t(component[k])];
+  return kept;
 }
 
 }  // namespace
@@ -195,6 +210,12 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   const auto voxel_centre = [&](std::size_t k) {
     return world(lo + side * (glm::dvec3(double(k % cells.x), double((k / cells.x) % cells.y), double(k / (std::size_t(cells.x) * cells.y))) + 0.5));
   };
+  std::vector<std::size_t> animal_cells;
+  for (const glm::dvec3& p : animal_points) {
+    const glm::dvec3 d = p - base, cell = glm::floor((glm::dvec3(glm::dot(d, u), glm::dot(d, v), glm::dot(d, n)) - lo) / side);
+    if (glm::all(glm::greaterThanEqual(cell, glm::dvec3(0.0))) && glm::all(glm::lessThan(cell, glm::dvec3(cells))))
+      animal_cells.push_back((std::size_t(cell.z) * cells.y + std::size_t(cell.y)) * cells.x + std::size_t(cell.x));
+  }
   const auto carve = [&] {
     const std::size_t total = std::size_t(cells.x) * cells.y * cells.z;
     std::vector<char> kept(total, 0);
@@ -211,9 +232,10 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
         kept[k] = seen >= 3 && misses <= std::max<std::size_t>(1, seen / 5);
       }
     });
-    // The animal is one solid: a cluster of voxels apart from the largest is where a few views' cuts
-    // took the same patch of wall or floor, and drawn back it would hold that patch in their masks.
-    const std::vector<char> animal_voxels = largest_component(kept, cells);
+    // The animal is one solid: a cluster of voxels apart from the one its sparse points lie in is
+    // where a few views' cuts took the same patch of wall or floor, and drawn back it would hold
+    // that patch in their masks.
+    const std::vector<char> animal_voxels = animal_components(kept, cells, animal_cells);
     std::vector<glm::dvec3> voxels;
     for (std::size_t k = 0; k < total; ++k)
       if (animal_voxels[k])
@@ -277,6 +299,8 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   std::vector<double> shares(views), agreement(views);
   for (std::size_t i = 0; i < views; ++i) shares[i] = double(cv::countNonZero(cut[i])) / double(cut[i].total()), agreement[i] = hull_agreement(i);
   const double median_share = median_of(shares), median_agreement = median_of(agreement);
+  if (median_share == 0)  // nothing below would notice: every view agrees with an empty hull
+    throw InputError("prepare: the automatic masks found no animal in most views; pass --masks DIR (one mask per photo)");
   // A cut that lost the animal, or caught something else (a view whose seeds and colours misled the
   // graph cut: its agreement with the hull the other views share far below theirs), is cut again
   // from that hull alone; if that cut fails too, the hull itself is taken. Either way it is named.

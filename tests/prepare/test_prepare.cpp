@@ -234,7 +234,7 @@ TEST_CASE("prepare on photos as a person takes them: JPEG with EXIF, walked roun
           " % of the radius (", a.worst_camera, "), automatic masks IoU median ", a.median_iou, " worst ", a.worst_iou, " from ",
           report["automatic_masks"]["animal_points"].get<std::size_t>(), " animal points");
   // Every photo placed within the small rig scene's bounds (1.0-3.9 % of the radius measured). The
-  // masks: median 0.93-0.94, worst 0.84-0.91 (0.37-0.66 before the hull kept only its largest part:
+  // masks: median 0.93-0.94, worst 0.84-0.91 (0.37-0.66 before the hull kept only the parts holding the animal:
   // a patch of wall a few views took held in the masks of the views round the path's longest stride).
   CHECK(prepared.cameras.size() == truth.cameras.size());
   CHECK(a.worst_angle_deg < 1.0);
