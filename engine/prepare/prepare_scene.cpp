@@ -220,11 +220,11 @@ json prepare_scene(const PrepareOptions& o) {
                                                   log_file));
     const fs::path sparse = work / "colmap" / "sparse";
     fs::create_directories(sparse);
-    // One thread: the mapper's threads draw from their random generators in whatever order they run,
-    // so the same photos gave cameras a few per cent of the radius apart from run to run; on one it
-    // gives the same ones each time, and as fast below COLMAP's 50,000 residuals for threaded bundle
-    // adjustment.
-    steps.add("mapping", run_colmap("mapper", {"--database_path", database.string(), "--image_path", images.string(), "--output_path", sparse.string(), "--Mapper.num_threads", "1"}, log_file));
+    // COLMAP's threads make each run differ a little (its SIFT descriptors change by a few bytes, its
+    // mapper draws random samples in whatever order its threads run). One mapper thread made the
+    // same database give the same cameras, but one run of four on it placed a photo 2.8 radii off,
+    // where the threaded mapper had placed every photo in six; so the threads stay.
+    steps.add("mapping", run_colmap("mapper", {"--database_path", database.string(), "--image_path", images.string(), "--output_path", sparse.string()}, log_file));
     // COLMAP writes one model per connected group of photos; the largest is the animal, unless two are alike.
     const std::vector<ColmapModel> models = read_colmap_models(sparse);
     model = choose_colmap_model(models, kMinPhotos, log_file).folder;

@@ -140,8 +140,8 @@ const Fixture& fixture() {
 
 TEST_CASE("prepare places every photo of a textured synth scene near the true cameras, masks with them") {
   // The small scene's bounds are looser than the issue's, which the full one checks: within 0.5
-  // degrees and 1 % of the animal's radius. COLMAP's SIFT threads make each run's descriptors differ
-  // a little (in 11 of 36 photos, by a few bytes), and with them its matches and cameras.
+  // degrees and 1 % of the animal's radius. COLMAP's threads make each run differ a little (its SIFT
+  // descriptors in 11 of 36 photos by a few bytes, its mapper's random samples), and its cameras.
   const Fixture& f = fixture();
   // At 320 px COLMAP's radial distortion varies from run to run (k 0.002 in one, larger in another,
   // which took the masks' IoU to 0.94 and the centres from 2.8 % to 4.3 %).
