@@ -54,8 +54,9 @@ void graph_cut(const cv::Mat& photo, cv::Mat& labels, std::uint32_t iterations, 
 }
 
 // The 26-connected clusters of the marked cells of a grid (x fastest, then y, then z) that hold the
-// animal: each holding at least a fifth of the animal's sparse points that fall in (or next to) a
-// marked cell, the cells given by `animal_cells`; the largest cluster when none falls near one.
+// animal: the one holding the most of the animal's sparse points that fall in (or next to) a marked
+// cell, the cells given by `animal_cells`, and any holding a fifth of them; the largest cluster when
+// none falls near one.
 std::vector<char> animal_components(const std::vector<char>& marked, const glm::uvec3& cells, const std::vector<std::size_t>& animal_cells) {
   std::vector<int> component(marked.size(), -1);
   std::vector<std::size_t> sizes;
@@ -94,8 +95,11 @@ std::vector<char> animal_components(const std::vector<char>& marked, const glm::
     if (found < 0) each_neighbour(cell, [&](std::size_t n) { found = found < 0 ? component[n] : found; });
     if (found >= 0) ++points[std::size_t(found)], ++placed;
   }
+  // The cluster with the most points always (the largest when none holds one), and any other that
+  // holds a fifth of them.
   std::vector<char> chosen(sizes.size(), 0);
-  if (placed == 0) chosen[std::size_t(std::max_element(sizes.begin(), sizes.end()) - sizes.begin())] = 1;
+  const auto& by = placed > 0 ? points : sizes;
+  chosen[std::size_t(std::max_element(by.begin(), by.end()) - by.begin())] = 1;
   for (std::size_t c = 0; c < sizes.size(); ++c) chosen[c] |= placed > 0 && 5 * points[c] >= placed;
   for (std::size_t k = 0; k < marked.size(); ++k) kept[k] = component[k] >= 0 && chosen[std::size_t(component[k])];
   return kept;
@@ -310,7 +314,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
     labels[i].setTo(cv::Scalar(cv::GC_PR_BGD));
     cut[i] = hull_masks[i].clone();
     hull_cut(i);
-    if (hull_agreement(i) < 0.5 * median_agreement) {
+    if (hull_agreement(i) < 0.5 * median_agreement || cv::countNonZero(cut[i]) == 0) {
       cut[i] = hull_masks[i].clone();
       replaced.push_back(scene.cameras[i].name);
     } else {
@@ -321,7 +325,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   report["recut_from_hull"] = recut;
   report["replaced_by_hull"] = replaced;
   if (!recut.empty() || !replaced.empty())
-    log::warn("prepare: ", recut.size() + replaced.size(), " automatic mask(s) lost the animal and were made again from the other views' hull: ",
+    log::warn("prepare: ", recut.size() + replaced.size(), " automatic mask(s) lost the animal or caught something else, and were made again from the other views' hull: ",
               recut.empty() ? replaced.front() : recut.front(), recut.size() + replaced.size() > 1 ? ", ..." : "");
   report["hull_voxels"] = voxels;
   report["hull_voxel_size"] = side;

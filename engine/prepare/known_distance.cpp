@@ -85,7 +85,7 @@ std::map<long long, Lens> read_colmap_cameras(const fs::path& cameras_txt) {
     std::istringstream words(line);
     long long id;
     Lens lens;
-    words >> id >> lens.model >> lens.width >> lens.height;
+    if (!(words >> id >> lens.model >> lens.width >> lens.height)) continue;  // a blank or cut line
     for (double x; words >> x;) lens.params.push_back(x);
     by_id[id] = lens;
   }
