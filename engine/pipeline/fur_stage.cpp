@@ -49,7 +49,7 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 7;  // 2: fur/roots.npz when the groom has roots of its own; 3: selection, length factors; 4: the selection trades held-out orientation against the envelope; 5: strand colours; 6: body colours; 7: strand and body colours in one pass (metrics.json colors.seconds is the pass)
+constexpr int kStageVersion = 8;  // 2: fur/roots.npz when the groom has roots of its own; 3: selection, length factors; 4: the selection trades held-out orientation against the envelope; 5: strand colours; 6: body colours; 7: strand and body colours in one pass (metrics.json colors.seconds is the pass); 8: the chamfer margin follows the photos' resolution of the fur
 
 }  // namespace
 
@@ -395,8 +395,10 @@ json train(StageContext& c, const FurSettings& s, const FurInputs& in, std::uniq
 }
 
 // Which groom to keep (fur_selection.hpp): the 0-step groom, the warm-up's, the trained one, each
-// later one only where it beats the one kept so far. Leaves the trainer's field at the choice.
-json select_groom(StageContext& c, const FurSettings& s, const FurInputs& in, fur::FurTrainer& trainer, const FurGroundTruth& gt) {
+// later one only where it beats the one kept so far, by a margin at M_NeuS that follows how well the
+// training photos resolve the fur (`image_weight`). Leaves the trainer's field at the choice.
+json select_groom(StageContext& c, const FurSettings& s, const FurInputs& in, fur::FurTrainer& trainer, const FurGroundTruth& gt,
+                  double image_weight) {
   const fur::FurFieldState* warm = trainer.warm_state();
   if (s.select == "trained") return {{"kept", "trained"}, {"reason", "fur.select=trained"}};
   if (s.select == "warm") {
@@ -421,6 +423,8 @@ json select_groom(StageContext& c, const FurSettings& s, const FurInputs& in, fu
   const fur::FurFieldState* kept = nullptr;
   const char* kept_name = "";
   GroomSignals kept_signals;
+  GroomChoiceTolerances tolerances;
+  tolerances.image_weight = image_weight;
   std::string reason;
   for (const auto& [name, state] : candidates) {
     const GroomSignals g = measure(*state, record[name]);
@@ -428,12 +432,13 @@ json select_groom(StageContext& c, const FurSettings& s, const FurInputs& in, fu
       kept = state, kept_name = name, kept_signals = g;
       continue;
     }
-    const GroomChoice choice = choose_groom(kept_signals, g);
+    const GroomChoice choice = choose_groom(kept_signals, g, tolerances);
     record[name]["against"] = kept_name, record[name]["kept"] = choice.trained, record[name]["reason"] = choice.reason;
     if (choice.trained) kept = state, kept_name = name, kept_signals = g, reason = choice.reason;
   }
   trainer.set_state(*kept);
   record["kept"] = kept_name;
+  record["envelope_allowed"] = tolerances.envelope_allowed(!in.data.held_out.empty());
   record["reason"] = reason.empty() ? "no later groom gained on the held-out views or M_NeuS" : reason;
   log::info("fur: keeping the ", kept_name, " groom: ", record["reason"].get<std::string>());
   return record;
@@ -604,7 +609,7 @@ json FurStage::run(StageContext& c, const fs::path& out_dir, const fs::path& res
   write_file_atomic(out.training(), loss_curve);
 
   t.restart();
-  const json selection = select_groom(c, s, in, *trainer, gt);
+  const json selection = select_groom(c, s, in, *trainer, gt, resolution["image_weight_mean"].get<double>());
   seconds["selection"] = t.seconds();
   stop_if_interrupted("the selection");
   fur::save_fur_model(out.model(), trainer->field(), *prior, trainer->step(), s.training.train_decoder);

@@ -63,6 +63,37 @@ TEST_CASE("fur selection: the trained groom is kept only where the held-out view
   }
 }
 
+TEST_CASE("fur selection: the chamfer's margin follows how well the photos resolve the fur (recorded runs)") {
+  // metrics.json `selection` of real runs: the 0-step groom against the trained one, and the training
+  // views' mean image weight. F(2 mm, 20) against the truth in the comments.
+  GroomChoiceTolerances resolved, unresolved;
+  resolved.image_weight = 1.0, unresolved.image_weight = 0.19;
+  SUBCASE("the bench cat at 16,000 strands a step (fur 5.8 px): +3.7 at 2 mm, chamfer 10 % worse: trained") {
+    const GroomSignals zero = signals(0.856, 25.09, 1.50, 3.31), trained = signals(0.880, 24.09, 1.84, 3.46);
+    const GroomChoice c = choose_groom(zero, trained, resolved);
+    CHECK(c.trained);
+    CHECK(c.reason.find("resolution of the fur allows") != std::string::npos);
+    CHECK_FALSE(choose_groom(zero, trained).trained);  // the strict rule refused it
+  }
+  SUBCASE("the lion at 1024 px (fur 6.5 px): +4.8 at 2 cm, chamfer 8 % worse, IoU 0.003 lower: trained") {
+    CHECK(choose_groom(signals(0.665, 19.66, 5.99, 12.13), signals(0.662, 18.96, 6.99, 12.54), resolved).trained);
+  }
+  SUBCASE("the demo (fur 2.9 px, weight 0.19): -6.7 at 2 mm, chamfer 35 % worse, orientation 8 % better: refused") {
+    const GroomSignals zero = signals(0.709, 40.17, 1.51, 3.30), trained = signals(0.714, 36.86, 2.59, 3.92);
+    const GroomChoice c = choose_groom(zero, trained, unresolved);
+    CHECK_FALSE(c.trained);
+    CHECK(c.reason.find("+35 %, 9 % allowed") != std::string::npos);
+    CHECK_FALSE(choose_groom(zero, trained, resolved).trained);  // beyond the widest margin as well
+  }
+  SUBCASE("no held-out view: no margin beyond the base tolerance") {
+    CHECK(resolved.envelope_allowed(false) == doctest::Approx(resolved.envelope));
+    CHECK(resolved.envelope_allowed(true) == doctest::Approx(0.25));
+    const GroomChoice c = choose_groom(signals(0, 0, 1.50, 3.31, false), signals(0, 0, 1.84, 3.46, false), resolved);
+    CHECK_FALSE(c.trained);
+    CHECK(c.reason.find("off M_NeuS") != std::string::npos);
+  }
+}
+
 TEST_CASE("fur selection: the signals' record") {
   const nf::json j = to_json(signals(0.8, 40.0, 4.0, 6.0));
   CHECK(j["envelope_mm"].get<double>() == doctest::Approx(5.0));
