@@ -10,6 +10,7 @@
 #include "engine/core/error.hpp"
 #include "engine/core/log.hpp"
 #include "engine/core/parallel.hpp"
+#include "engine/core/stats.hpp"
 #include "engine/io/image.hpp"
 #include "engine/prepare/floor_consistency.hpp"
 
@@ -296,13 +297,9 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
     const double either = double(cv::countNonZero(cut[i] | hull_masks[i]));
     return either > 0 ? double(cv::countNonZero(cut[i] & hull_masks[i])) / either : 0.0;
   };
-  const auto median_of = [&](std::vector<double> values) {
-    std::nth_element(values.begin(), values.begin() + std::ptrdiff_t(views / 2), values.end());
-    return values[views / 2];
-  };
   std::vector<double> shares(views), agreement(views);
   for (std::size_t i = 0; i < views; ++i) shares[i] = double(cv::countNonZero(cut[i])) / double(cut[i].total()), agreement[i] = hull_agreement(i);
-  const double median_share = median_of(shares), median_agreement = median_of(agreement);
+  const double median_share = nf::median(shares), median_agreement = nf::median(agreement);
   if (median_share == 0)  // nothing below would notice: every view agrees with an empty hull
     throw InputError("prepare: the automatic masks found no animal in most views; pass --masks DIR (one mask per photo)");
   // A cut that lost the animal, or caught something else (a view whose seeds and colours misled the
