@@ -13,6 +13,8 @@
 #include "engine/core/stats.hpp"
 #include "engine/io/image.hpp"
 #include "engine/prepare/floor_consistency.hpp"
+#include "engine/prepare/silhouette_check.hpp"
+#include "engine/prepare/tolerant_hull.hpp"
 
 namespace nf::prepare {
 
@@ -131,26 +133,15 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
                      "where the animal is; pass --masks DIR (one mask per photo) or take the photos closer, around the animal");
   if (!has_floor) log::warn("prepare: no floor found among the sparse points; the automatic masks rely on the animal's distance from the cameras alone");
 
-  // The animal's box in the floor's frame, generous: sparse points on fur are few and cluster on the
-  // body, while the head, tail and legs reach farther. Down to the floor (the paws stand on it).
-  const glm::dvec3 u = glm::normalize(glm::cross(floor.normal, std::abs(floor.normal.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
-  const glm::dvec3 v = glm::cross(floor.normal, u), n = floor.normal;
-  const glm::dvec3 base = layout.base();
-  double horizontal = 0, top = 0;
-  for (const glm::dvec3& p : animal_points) {
-    const glm::dvec3 d = p - base;
-    horizontal = std::max(horizontal, glm::length(d - glm::dot(d, n) * n));
-    top = std::max(top, glm::dot(d, n));
-  }
-  horizontal = std::clamp(1.6 * horizontal, 0.3 * reach, 0.6 * reach);
-  top = std::min(1.5 * top, 0.8 * reach);
-  glm::dvec3 lo(-horizontal, -horizontal, has_floor ? 0.0 : -top), hi(horizontal, horizontal, top);
-  const auto world = [&](const glm::dvec3& local) { return base + local.x * u + local.y * v + local.z * n; };
-  std::vector<glm::dvec3> corners;
-  for (int k = 0; k < 8; ++k) corners.push_back(world({k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z}));
+  const AnimalBox extent = animal_box(layout);
+  const glm::dvec3 u = extent.u, v = extent.v, n = extent.n, base = extent.base, lo = extent.lo, hi = extent.hi;
+  const double horizontal = extent.horizontal;
+  const auto world = [&](const glm::dvec3& local) { return extent.world(local); };
+  const std::vector<glm::dvec3> corners = extent.corners();
 
   const std::size_t views = scene.cameras.size();
   std::vector<cv::Mat> photos(views), labels(views), cut(views);
+  std::vector<char> left_out(views, 0);  // misplaced views: no part in the hull
   std::vector<cv::Mat> hull_masks(views);
   std::vector<cv::Mat> grey(views);
   std::vector<int> floor_pixels(views, 0), off_floor_pixels(views, 0);
@@ -226,15 +217,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
     std::vector<char> kept(total, 0);
     parallel_for(total, [&](std::size_t k0, std::size_t k1) {
       for (std::size_t k = k0; k < k1; ++k) {
-        const glm::dvec3 p = voxel_centre(k);
-        std::size_t misses = 0, seen = 0;
-        for (std::size_t i = 0; i < views; ++i) {
-          const glm::dvec3 q = scene.cameras[i].project(p);
-          if (q.z <= 0 || q.x < 0 || q.y < 0 || q.x >= cut[i].cols || q.y >= cut[i].rows) continue;
-          ++seen;
-          misses += cut[i].at<std::uint8_t>(int(q.y), int(q.x)) == 0;
-        }
-        kept[k] = seen >= 3 && misses <= std::max<std::size_t>(1, seen / 5);
+        kept[k] = in_tolerant_hull(scene.cameras, cut, voxel_centre(k), &left_out);
       }
     });
     // The animal is one solid: a cluster of voxels apart from the one its sparse points lie in is
@@ -284,6 +267,16 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
     });
   };
   each_view(first_cut);
+  // A pose COLMAP got wrong: the photo's own cut (its seeds are its keypoints, where the animal
+  // really is) meets the other views' silhouette only when moved.
+  {
+    std::vector<std::vector<std::uint8_t>> first(views);
+    for (std::size_t i = 0; i < views; ++i) first[i].assign(cut[i].datastart, cut[i].dataend);
+    const SilhouetteCheck check = check_silhouettes(scene.cameras, first, extent);
+    report["first_cuts"] = check.report(scene.cameras);
+    for (std::size_t i = 0; i < views; ++i)
+      if (check.views[i].misplaced) left_out[i] = 1, out.misplaced.push_back({i, check.reason(i)});
+  }
   std::size_t voxels = 0;
   for (std::uint32_t round = 1; round < o.rounds; ++round) {
     voxels = carve();

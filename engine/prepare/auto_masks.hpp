@@ -6,7 +6,8 @@
 // background points and by what the other photos say of its floor (floor_consistency.hpp: the legs
 // and the body seen against the floor stand out, the floor and shadows on it agree); then the masks
 // are made to agree across views: a visual hull is carved from them, projected back, and each photo
-// is cut again inside it.
+// is cut again inside it. A view whose first cut fits the others' silhouette only once moved has a
+// wrong pose and takes no part.
 #include <cstdint>
 #include <vector>
 
@@ -26,6 +27,9 @@ struct AutoMaskOptions {
 struct AutoMasks {
   std::vector<std::vector<std::uint8_t>> masks;  // per camera of the scene, width x height, 1 = animal
   json report;  // the centre, floor and animal points found, and per view its share of animal and its agreement with the hull
+  // Views whose first cut meets the others' silhouette only when moved (silhouette_check.hpp): their
+  // pose is wrong. They carve nothing, and the caller leaves them out of the scene.
+  std::vector<StrayCamera> misplaced;
 };
 
 // The scene's cameras must be undistorted pinholes with their photos; `points` and `layout` from the

@@ -20,6 +20,7 @@
 #include "engine/prepare/colmap_models.hpp"
 #include "engine/prepare/known_distance.hpp"
 #include "engine/prepare/scene_layout.hpp"
+#include "engine/prepare/silhouette_check.hpp"
 #include "engine/prepare/sparse_points.hpp"
 #include "engine/prepare/video_frames.hpp"
 
@@ -283,13 +284,38 @@ json prepare_scene(const PrepareOptions& o) {
     layout = find_layout(scene.cameras, sparse);
   }
   std::vector<std::vector<std::uint8_t>> made;
+  // A pose the masks refute (silhouette_check.hpp) is left out like a stray, with its mask.
+  const auto leave_out = [&](std::size_t i, const std::string& reason) {
+    const std::string name = scene.cameras[i].image.filename().string();
+    report["stray_cameras"].push_back({{"photo", name}, {"reason", reason}});
+    log::warn("prepare: COLMAP's pose for ", name, " is left out: ", reason);
+    scene.cameras.erase(scene.cameras.begin() + std::ptrdiff_t(i));
+    made.erase(made.begin() + std::ptrdiff_t(i));
+  };
   if (automatic) {
     AutoMasks found = automatic_masks(scene, sparse, layout);
     made = std::move(found.masks);
     report["automatic_masks"] = std::move(found.report);
+    for (auto wrong = found.misplaced.rbegin(); wrong != found.misplaced.rend(); ++wrong) leave_out(wrong->index, wrong->reason);
     steps.add("automatic_masks", report["automatic_masks"]["seconds"].get<double>());
     start = std::chrono::steady_clock::now();
+  } else {
+    // Resampled masks are soft at the outline: the same 0.5 threshold as every mask nf_gpu reads.
+    for (const io::Camera& c : scene.cameras) made.push_back(io::mask_of(io::read_image(undistorted_masks / "images" / c.image.filename())));
+    // The user's masks are the animal: a pose whose mask the other views' silhouettes do not meet
+    // where it says is COLMAP's error, and the view is left out like a stray.
+    const auto check_start = std::chrono::steady_clock::now();
+    const SilhouetteCheck check = check_silhouettes(scene.cameras, made, animal_box(layout));
+    report["silhouettes"] = check.report(scene.cameras);
+    for (std::size_t i = scene.cameras.size(); i-- > 0;) {
+      const std::string name = scene.cameras[i].image.filename().string();
+      if (check.views[i].disagrees) log::warn("prepare: the mask of ", name, " disagrees with the silhouette the other views carve (IoU ", check.views[i].iou, " against the views' median ", check.median_iou, "); check it in previews/");
+      if (check.views[i].misplaced) leave_out(i, check.reason(i));
+    }
+    steps.add("silhouette_check", since(check_start));
   }
+  if (scene.cameras.size() < kMinPhotos)
+    throw InputError("prepare: only " + std::to_string(scene.cameras.size()) + " of the photos COLMAP placed are plausible (see prepare's warnings); take more photos, in a circle around the animal");
   fs::create_directories(work / "images");
   fs::create_directories(work / "masks");
   std::vector<std::string> placed;
@@ -301,8 +327,7 @@ json prepare_scene(const PrepareOptions& o) {
     const fs::path image = work / "images" / name;
     fs::rename(c.image, image);
     c.image = image;
-    // Resampled masks are soft at the outline: the same 0.5 threshold as every mask nf_gpu reads.
-    const std::vector<std::uint8_t> inside = automatic ? std::move(made[i]) : io::mask_of(io::read_image(undistorted_masks / "images" / name));
+    const std::vector<std::uint8_t> inside = std::move(made[i]);
     c.mask = work / "masks" / (fs::path(name).stem().string() + ".png");
     io::write_png(c.mask, io::Image{c.width, c.height, 1, std::vector<float>(inside.begin(), inside.end())});
     write_outline_preview(work / "previews" / (fs::path(name).stem().string() + ".jpg"), io::read_image(image), inside);

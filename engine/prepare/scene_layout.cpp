@@ -125,6 +125,29 @@ std::vector<StrayCamera> path_jumps(const std::vector<io::Camera>& in_time_order
   return jumps;
 }
 
+std::vector<glm::dvec3> AnimalBox::corners() const {
+  std::vector<glm::dvec3> out;
+  for (int k = 0; k < 8; ++k) out.push_back(world({k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z}));
+  return out;
+}
+
+AnimalBox animal_box(const SceneLayout& layout) {
+  AnimalBox b;
+  const glm::dvec3 n = layout.floor.normal;
+  b.n = n, b.u = glm::normalize(glm::cross(n, std::abs(n.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0))), b.v = glm::cross(n, b.u);
+  b.base = layout.base();
+  double horizontal = 0, top = 0;
+  for (const glm::dvec3& p : layout.animal_points) {
+    const glm::dvec3 d = p - b.base;
+    horizontal = std::max(horizontal, glm::length(d - glm::dot(d, n) * n));
+    top = std::max(top, glm::dot(d, n));
+  }
+  b.horizontal = std::clamp(1.6 * horizontal, 0.3 * layout.reach, 0.6 * layout.reach);
+  top = std::min(1.5 * top, 0.8 * layout.reach);
+  b.lo = glm::dvec3(-b.horizontal, -b.horizontal, layout.has_floor ? 0.0 : -top), b.hi = glm::dvec3(b.horizontal, b.horizontal, top);
+  return b;
+}
+
 glm::dmat4 upright_transform(const SceneLayout& l) {
   const glm::dvec3 y = glm::normalize(l.up);
   // Any heading will do; COLMAP's x axis laid on the floor keeps it recognisable.

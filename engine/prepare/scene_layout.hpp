@@ -35,6 +35,19 @@ struct SceneLayout {
 // InputError when the cameras' axes are all parallel (no point they aim at).
 SceneLayout find_layout(const std::vector<io::Camera>& cameras, const SparsePoints& points);
 
+// The animal's box in the floor's frame (u, v along the floor, n its normal; lo and hi about the
+// focus's foot), generous: sparse points on fur are few and cluster on the body, while the head,
+// tail and legs reach farther. Down to the floor (the paws stand on it).
+struct AnimalBox {
+  glm::dvec3 base{0.0}, u{1.0, 0.0, 0.0}, v{0.0, 0.0, 1.0}, n{0.0, 1.0, 0.0};
+  glm::dvec3 lo{0.0}, hi{0.0};
+  double horizontal = 0;  // the box's half width along the floor
+  glm::dvec3 world(const glm::dvec3& local) const { return base + local.x * u + local.y * v + local.z * n; }
+  glm::dvec3 local(const glm::dvec3& p) const { return {glm::dot(p - base, u), glm::dot(p - base, v), glm::dot(p - base, n)}; }
+  std::vector<glm::dvec3> corners() const;
+};
+AnimalBox animal_box(const SceneLayout& layout);
+
 // A camera COLMAP placed where no photo of the animal can have been taken: aimed well away from the
 // point the others aim at, or several times nearer or further than the others (a photo matched to
 // the wrong side of a symmetric animal or floor pattern). Such a pose would mislead every stage.

@@ -152,13 +152,20 @@ TEST_CASE("prepare places every photo of a textured synth scene near the true ca
   o.masks = f.root / "truth" / "masks";
   o.cm_per_unit = 2.5;
   const json report = prepare::prepare_scene(o);
-  CHECK(report["placed"] == 36);
-  CHECK(report["not_placed"].empty());
+  // Every photo placed, or left out as COLMAP's error (the silhouette check refutes a pose some
+  // runs get wrong: once 2.8 radii off); the poses kept are checked against the truth below.
+  const json& silhouettes = report["silhouettes"];
+  double worst_silhouette = 1;
+  for (const auto& [name, view] : silhouettes["views"].items()) worst_silhouette = std::min(worst_silhouette, view["iou"].get<double>());
+  MESSAGE("silhouettes: median IoU ", silhouettes["median_iou"].get<double>(), ", worst ", worst_silhouette, "; left out: ", report["stray_cameras"].dump());
+  CHECK(report["placed"].get<std::size_t>() + report["stray_cameras"].size() == 36);
+  CHECK(report["stray_cameras"].size() <= 1);
+  CHECK(report["not_placed"].size() == report["stray_cameras"].size());
   CHECK(report["masks"] == "given");
   CHECK(report["reprojection_error_px"].get<double>() < 1.0);
   CHECK_FALSE(fs::exists(f.root / "prepared.partial"));
   const io::Scene prepared = io::read_scene(o.out);
-  REQUIRE(prepared.cameras.size() == f.truth.cameras.size());
+  REQUIRE(prepared.cameras.size() == report["placed"].get<std::size_t>());
   CHECK(prepared.cm_per_unit == 2.5);
   prepared.check_files("prepared");
   CHECK(fs::exists(o.out / "previews" / "000.jpg"));
@@ -203,12 +210,17 @@ TEST_CASE("prepare makes the masks itself when the photos have none, close to th
   const json report = prepare::prepare_scene(o);
   CHECK(report["masks"] == "automatic");
   CHECK(report["automatic_masks"]["floor_found"] == true);
+  // A pose the first cuts refute is left out (COLMAP's runs differ); none is expected here.
+  const json& first_cuts = report["automatic_masks"]["first_cuts"];
+  CHECK(report["placed"].get<std::size_t>() + report["stray_cameras"].size() == f.truth.cameras.size());
+  CHECK(report["stray_cameras"].size() <= 1);
   const io::Scene prepared = io::read_scene(o.out);
-  REQUIRE(prepared.cameras.size() == f.truth.cameras.size());
+  REQUIRE(prepared.cameras.size() == report["placed"].get<std::size_t>());
   const Agreement a = compare(prepared, f.truth, f.root / "truth");
   MESSAGE("automatic masks: IoU median ", a.median_iou, " worst ", a.worst_iou, ", ", report["automatic_masks"]["seconds"].get<double>(), " s; ",
           report["automatic_masks"]["animal_points"].get<std::size_t>(), " animal points, ", report["automatic_masks"]["disagreeing_views"].size(),
-          " views flagged");
+          " views flagged; the first cuts against their silhouette: median IoU ", first_cuts["median_iou"].get<double>(), ", ",
+          first_cuts["disagreeing"].size(), " disagreeing; left out ", report["stray_cameras"].dump());
   CHECK(a.median_iou >= min_median);
   CHECK(a.worst_iou >= min_worst);
   CHECK(fs::exists(o.out / "previews" / "000.jpg"));
@@ -465,10 +477,11 @@ TEST_CASE("prepare --video: the frames placed by COLMAP's sequential order, upri
   // Where COLMAP puts the frames is measured (the MESSAGE above), not asserted: on compressed 320 px
   // frames it misplaced some in about half the runs (one 0.9-2.7 radii off, which path_jumps leaves
   // out; others 0.3-1 radius off and a few degrees, which nothing catches yet; in the worst run 22 of
-  // 36 frames lay beyond 4 % after the alignment the misplaced ones skew). Asserted: every frame
-  // placed or left out as a stray, at most two left out, and the scene upright.
+  // 36 frames lay beyond 4 % after the alignment the misplaced ones skew; the silhouette check now
+  // leaves out those its masks refute). Asserted: every frame placed or left out as a stray, at
+  // most four left out, and the scene upright.
   CHECK(report["placed"].get<std::size_t>() + report["stray_cameras"].size() == f.truth.cameras.size());
-  CHECK(report["stray_cameras"].size() <= 2);
+  CHECK(report["stray_cameras"].size() <= 4);
   CHECK(a.up_error_deg < 1.0);
   CHECK(fs::exists(o.out / "colmap" / "frames" / "frame_0001.jpg"));
 }

@@ -1,0 +1,155 @@
+#include "engine/prepare/silhouette_check.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include <opencv2/imgproc.hpp>
+
+#include "engine/core/parallel.hpp"
+#include "engine/core/stats.hpp"
+#include "engine/prepare/tolerant_hull.hpp"
+
+namespace nf::prepare {
+
+namespace {
+
+// The slide search works on masks reduced to this many pixels on their longer side: a misplaced
+// pose moves the animal by a tenth of the photo or more, and the sums over every slide stay cheap.
+constexpr int kSearchSide = 160;
+
+cv::Mat binary(const std::vector<std::uint8_t>& mask, const io::Camera& c) {
+  cv::Mat m(int(c.height), int(c.width), CV_8U);
+  for (std::size_t p = 0; p < mask.size(); ++p) m.data[p] = mask[p] ? 255 : 0;
+  return m;
+}
+
+double iou(const cv::Mat& a, const cv::Mat& b) {
+  const double either = double(cv::countNonZero(a | b));
+  return either > 0 ? double(cv::countNonZero(a & b)) / either : 0.0;
+}
+
+// The best IoU of `mask` slid over `hull` by up to `reach` pixels (both reduced to kSearchSide), and
+// the slide in full-size pixels: the overlap at every slide is one correlation of the two.
+std::pair<double, double> best_slide(const cv::Mat& mask, const cv::Mat& hull, double reach_share) {
+  const double scale = double(kSearchSide) / double(std::max(mask.cols, mask.rows));
+  const cv::Size small(std::max(1, int(std::lround(mask.cols * scale))), std::max(1, int(std::lround(mask.rows * scale))));
+  cv::Mat a, b;
+  cv::resize(mask, a, small, 0, 0, cv::INTER_AREA);
+  cv::resize(hull, b, small, 0, 0, cv::INTER_AREA);
+  a.convertTo(a, CV_32F, 1.0 / 255.0), b.convertTo(b, CV_32F, 1.0 / 255.0);
+  cv::threshold(a, a, 0.5, 1.0, cv::THRESH_BINARY), cv::threshold(b, b, 0.5, 1.0, cv::THRESH_BINARY);
+  const int reach = std::max(1, int(std::lround(reach_share * kSearchSide)));
+  cv::Mat padded, overlap;
+  cv::copyMakeBorder(b, padded, reach, reach, reach, reach, cv::BORDER_CONSTANT, cv::Scalar(0));
+  cv::matchTemplate(padded, a, overlap, cv::TM_CCORR);
+  const double area_a = cv::sum(a)[0], area_b = cv::sum(b)[0];
+  double best = 0, shift = 0;
+  for (int y = 0; y < overlap.rows; ++y)
+    for (int x = 0; x < overlap.cols; ++x) {
+      const double both = overlap.at<float>(y, x), either = area_a + area_b - both;
+      const double value = either > 0 ? both / either : 0.0;
+      if (value > best + 1e-9) best = value, shift = std::hypot(x - reach, y - reach) / scale;
+    }
+  return {best, shift};
+}
+
+}  // namespace
+
+SilhouetteCheck check_silhouettes(const std::vector<io::Camera>& cameras, const std::vector<std::vector<std::uint8_t>>& masks,
+                                  const AnimalBox& box, const SilhouetteOptions& o) {
+  SilhouetteCheck out;
+  const std::size_t views = cameras.size();
+  out.views.resize(views);
+  std::vector<cv::Mat> inside(views);
+  for (std::size_t i = 0; i < views; ++i) inside[i] = binary(masks.at(i), cameras[i]);
+
+  // The tolerant hull (tolerant_hull.hpp), as the automatic masks carve it.
+  const glm::dvec3 extent = box.hi - box.lo;
+  const double side = std::max({extent.x, extent.y, extent.z}) / double(o.cells);
+  const glm::uvec3 cells(glm::max(glm::dvec3(1.0), glm::ceil(extent / side)));
+  const std::size_t total = std::size_t(cells.x) * cells.y * cells.z;
+  const auto index = [&](std::size_t x, std::size_t y, std::size_t z) { return (z * cells.y + y) * cells.x + x; };
+  const auto centre = [&](std::size_t k) {
+    return box.world(box.lo + side * (glm::dvec3(double(k % cells.x), double((k / cells.x) % cells.y), double(k / (std::size_t(cells.x) * cells.y))) + 0.5));
+  };
+  std::vector<char> kept(total, 0);
+  parallel_for(total, [&](std::size_t k0, std::size_t k1) {
+    for (std::size_t k = k0; k < k1; ++k) {
+      kept[k] = in_tolerant_hull(cameras, inside, centre(k));
+    }
+  });
+  // A solid's outline is its surface's: only voxels with an empty 6-neighbour are drawn back.
+  std::vector<glm::dvec3> surface;
+  for (std::size_t z = 0; z < cells.z; ++z)
+    for (std::size_t y = 0; y < cells.y; ++y)
+      for (std::size_t x = 0; x < cells.x; ++x) {
+        const std::size_t k = index(x, y, z);
+        if (!kept[k]) continue;
+        ++out.hull_voxels;
+        const bool boundary = x == 0 || y == 0 || z == 0 || x + 1 == cells.x || y + 1 == cells.y || z + 1 == cells.z || !kept[index(x - 1, y, z)] ||
+                              !kept[index(x + 1, y, z)] || !kept[index(x, y - 1, z)] || !kept[index(x, y + 1, z)] || !kept[index(x, y, z - 1)] ||
+                              !kept[index(x, y, z + 1)];
+        if (boundary) surface.push_back(centre(k));
+      }
+  if (out.hull_voxels == 0) return out;
+
+  parallel_for(views, [&](std::size_t i0, std::size_t i1) {
+    for (std::size_t i = i0; i < i1; ++i) {
+      const io::Camera& c = cameras[i];
+      cv::Mat hull = cv::Mat::zeros(int(c.height), int(c.width), CV_8U);
+      for (const glm::dvec3& p : surface)
+        if (const glm::dvec3 q = c.project(p); q.z > 0) {
+          // A disc as wide as the voxel (rounded, not raised: a pixel more all round fattens thin legs).
+          const int radius = std::max(1, int(std::lround(0.7 * side * c.fx / q.z)));
+          cv::circle(hull, cv::Point(int(q.x), int(q.y)), radius, cv::Scalar(255), cv::FILLED);
+        }
+      ViewSilhouette& v = out.views[i];
+      v.iou = iou(inside[i], hull);
+      std::tie(v.shifted_iou, v.shift_px) = best_slide(inside[i], hull, o.max_shift);
+    }
+  });
+  std::vector<double> ious;
+  for (const ViewSilhouette& v : out.views) ious.push_back(v.iou);
+  out.median_iou = nf::median(ious);
+  // Well below the others' agreement (a drawn-back hull is a little fat, so views are judged
+  // against their median): a wrong pose when a slide brings the mask back within the others'
+  // agreement (a slide is only near a pose's error: it leaves the change of perspective), a wrong
+  // mask when none does.
+  const double low = out.median_iou - std::max(0.1, 0.2 * out.median_iou);
+  for (std::size_t i = 0; i < views; ++i) {
+    ViewSilhouette& v = out.views[i];
+    if (v.iou >= low) continue;
+    const double least_slide = o.min_shift * double(std::max(cameras[i].width, cameras[i].height));
+    v.misplaced = v.shifted_iou >= low && v.shifted_iou >= v.iou + 0.15 && v.shift_px >= least_slide;
+    v.disagrees = !v.misplaced;
+  }
+  return out;
+}
+
+std::string SilhouetteCheck::reason(std::size_t i) const {
+  const ViewSilhouette& v = views.at(i);
+  if (!v.misplaced) return "";
+  char why[240];
+  std::snprintf(why, sizeof why,
+                "its mask meets the silhouette the other views carve only %.0f px away (IoU %.2f where it is, %.2f moved; the views' median %.2f): "
+                "COLMAP's pose is off",
+                v.shift_px, v.iou, v.shifted_iou, median_iou);
+  return why;
+}
+
+json SilhouetteCheck::report(const std::vector<io::Camera>& cameras) const {
+  json per_view = json::object();
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    const ViewSilhouette& v = views[i];
+    per_view[cameras.at(i).image.filename().string()] = {{"iou", v.iou}, {"slid_iou", v.shifted_iou}, {"slide_px", v.shift_px}};
+  }
+  json misplaced = json::array(), disagreeing = json::array();
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    if (views[i].misplaced) misplaced.push_back(cameras[i].image.filename().string());
+    if (views[i].disagrees) disagreeing.push_back(cameras[i].image.filename().string());
+  }
+  return {{"median_iou", median_iou}, {"hull_voxels", hull_voxels}, {"misplaced", misplaced}, {"disagreeing", disagreeing}, {"views", per_view}};
+}
+
+}  // namespace nf::prepare
