@@ -6,6 +6,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "engine/core/error.hpp"
 #include "engine/core/parallel.hpp"
 #include "engine/core/stats.hpp"
 #include "engine/prepare/tolerant_hull.hpp"
@@ -19,6 +20,9 @@ namespace {
 constexpr int kSearchSide = 160;
 
 cv::Mat binary(const std::vector<std::uint8_t>& mask, const io::Camera& c) {
+  if (mask.size() != std::size_t(c.width) * c.height)
+    throw InputError("prepare: the mask of " + c.image.filename().string() + " has " + std::to_string(mask.size()) + " pixels where its photo has " +
+                     std::to_string(c.width) + " x " + std::to_string(c.height));
   cv::Mat m(int(c.height), int(c.width), CV_8U);
   for (std::size_t p = 0; p < mask.size(); ++p) m.data[p] = mask[p] ? 255 : 0;
   return m;

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "engine/core/error.hpp"
 #include "engine/io/image.hpp"
 #include "engine/io/mesh.hpp"
 #include "engine/io/scene.hpp"
@@ -102,6 +103,14 @@ TEST_CASE("silhouette check: a pose moved or turned is found, a wrong mask is to
   const json report = check.report(cameras);
   CHECK(report["misplaced"].size() == 2);
   CHECK(report["disagreeing"] == json::array({cameras[19].image.filename().string()}));
+}
+
+TEST_CASE("silhouette check: a mask of another size than its photo is named") {
+  const Scene& s = scene();
+  std::vector<std::vector<std::uint8_t>> masks = s.masks;
+  masks[3].resize(100);
+  CHECK_THROWS_WITH_AS(prepare::check_silhouettes(s.scene.cameras, masks, s.box),
+                       doctest::Contains(("the mask of " + s.scene.cameras[3].image.filename().string() + " has 100 pixels").c_str()), InputError);
 }
 
 TEST_CASE("silhouette check: views that share no volume conclude nothing") {
