@@ -16,7 +16,7 @@
 // tips far more than they gain in orientation (docs/fur-stage.md has both cases).
 // How much the chamfer may grow follows how well the training photos resolve the fur (the image
 // losses' own weight): M_NeuS is a reconstruction too, and where the photos show the fur the
-// held-out views are the nearer witness. Measured: where the fur spans 5.8-6.6 photo pixels the
+// held-out views are the nearer witness. Measured: where the fur spans 5.8-6.5 photo pixels the
 // trained grooms that gained 1.4-3.7 points at 2 mm had moved the chamfer 8-16 %; on the demo
 // (2.9 px, weight 0.19) the one that lost 6.7 points had moved it 35 %.
 #include <string>

@@ -134,7 +134,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   if (!has_floor) log::warn("prepare: no floor found among the sparse points; the automatic masks rely on the animal's distance from the cameras alone");
 
   const AnimalBox extent = animal_box(layout);
-  const glm::dvec3 u = extent.u, v = extent.v, n = extent.n, base = extent.base, lo = extent.lo, hi = extent.hi;
+  const glm::dvec3 base = extent.base, lo = extent.lo, hi = extent.hi;
   const double horizontal = extent.horizontal;
   const auto world = [&](const glm::dvec3& local) { return extent.world(local); };
   const std::vector<glm::dvec3> corners = extent.corners();
@@ -208,7 +208,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   };
   std::vector<std::size_t> animal_cells;
   for (const glm::dvec3& p : animal_points) {
-    const glm::dvec3 d = p - base, cell = glm::floor((glm::dvec3(glm::dot(d, u), glm::dot(d, v), glm::dot(d, n)) - lo) / side);
+    const glm::dvec3 cell = glm::floor((extent.local(p) - lo) / side);
     if (glm::all(glm::greaterThanEqual(cell, glm::dvec3(0.0))) && glm::all(glm::lessThan(cell, glm::dvec3(cells))))
       animal_cells.push_back((std::size_t(cell.z) * cells.y + std::size_t(cell.y)) * cells.x + std::size_t(cell.x));
   }
@@ -260,15 +260,18 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
     cut[i] = foreground(l);
   };
 
-  // Each photo's cut is independent of the others': one per core.
+  // Each photo's cut is independent of the others': one per core. Views left out (a wrong pose)
+  // are not cut again.
   const auto each_view = [&](const auto& body) {
     parallel_for(views, [&](std::size_t i0, std::size_t i1) {
-      for (std::size_t i = i0; i < i1; ++i) body(i);
+      for (std::size_t i = i0; i < i1; ++i)
+        if (!left_out[i]) body(i);
     });
   };
   each_view(first_cut);
   // A pose COLMAP got wrong: the photo's own cut (its seeds are its keypoints, where the animal
-  // really is) meets the other views' silhouette only when moved.
+  // really is) meets the silhouette the views carve together only when moved. Found in ascending
+  // order, which the caller relies on to erase them from the last.
   {
     std::vector<std::vector<std::uint8_t>> first(views);
     for (std::size_t i = 0; i < views; ++i) first[i].assign(cut[i].datastart, cut[i].dataend);
@@ -286,13 +289,13 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   voxels = carve();
   // The hull drawn back is a little fat (discs, voxels), so a view is judged against the others:
   // its agreement with the hull against the views' median.
-  const auto hull_agreement = [&](std::size_t i) {
-    const double either = double(cv::countNonZero(cut[i] | hull_masks[i]));
-    return either > 0 ? double(cv::countNonZero(cut[i] & hull_masks[i])) / either : 0.0;
-  };
-  std::vector<double> shares(views), agreement(views);
-  for (std::size_t i = 0; i < views; ++i) shares[i] = double(cv::countNonZero(cut[i])) / double(cut[i].total()), agreement[i] = hull_agreement(i);
-  const double median_share = nf::median(shares), median_agreement = nf::median(agreement);
+  const auto hull_agreement = [&](std::size_t i) { return mask_iou(cut[i], hull_masks[i]); };
+  std::vector<double> shares(views), agreement(views), kept_shares, kept_agreement;
+  for (std::size_t i = 0; i < views; ++i) {
+    shares[i] = double(cv::countNonZero(cut[i])) / double(cut[i].total()), agreement[i] = hull_agreement(i);
+    if (!left_out[i]) kept_shares.push_back(shares[i]), kept_agreement.push_back(agreement[i]);
+  }
+  const double median_share = nf::median(kept_shares), median_agreement = nf::median(kept_agreement);
   if (median_share == 0)  // nothing below would notice: every view agrees with an empty hull
     throw InputError("prepare: the automatic masks found no animal in most views; pass --masks DIR (one mask per photo)");
   // A cut that lost the animal, or caught something else (a view whose seeds and colours misled the
@@ -300,7 +303,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   // from that hull alone; if that cut fails too, the hull itself is taken. Either way it is named.
   std::vector<std::string> recut, replaced;
   for (std::size_t i = 0; i < views; ++i) {
-    if (cv::countNonZero(hull_masks[i]) == 0 || (shares[i] >= 0.3 * median_share && agreement[i] >= 0.5 * median_agreement)) continue;
+    if (left_out[i] || cv::countNonZero(hull_masks[i]) == 0 || (shares[i] >= 0.3 * median_share && agreement[i] >= 0.5 * median_agreement)) continue;
     labels[i].setTo(cv::Scalar(cv::GC_PR_BGD));
     cut[i] = hull_masks[i].clone();
     hull_cut(i);
@@ -326,7 +329,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
     const io::Camera& c = scene.cameras[i];
     per_view.push_back({{"view", c.name}, {"animal_share", double(cv::countNonZero(cut[i])) / double(cut[i].total())}, {"hull_iou", agreement[i]},
                         {"floor_pixels", floor_pixels[i]}, {"off_floor_pixels", off_floor_pixels[i]}});
-    if (agreement[i] < median_agreement - 0.08) flagged.push_back(c.name);  // well below the views' median
+    if (!left_out[i] && agreement[i] < median_agreement - 0.08) flagged.push_back(c.name);  // well below the views' median
     std::vector<std::uint8_t> mask(std::size_t(c.width) * c.height);
     for (std::uint32_t y = 0; y < c.height; ++y)
       for (std::uint32_t x = 0; x < c.width; ++x) mask[std::size_t(y) * c.width + x] = cut[i].at<std::uint8_t>(int(y), int(x)) ? 1 : 0;

@@ -284,6 +284,7 @@ json prepare_scene(const PrepareOptions& o) {
     layout = find_layout(scene.cameras, sparse);
   }
   std::vector<std::vector<std::uint8_t>> made;
+  const std::size_t before_check = scene.cameras.size();
   // A pose the masks refute (silhouette_check.hpp) is left out like a stray, with its mask.
   const auto leave_out = [&](std::size_t i, const std::string& reason) {
     const std::string name = scene.cameras[i].image.filename().string();
@@ -295,6 +296,7 @@ json prepare_scene(const PrepareOptions& o) {
   if (automatic) {
     AutoMasks found = automatic_masks(scene, sparse, layout);
     made = std::move(found.masks);
+    // found.misplaced is in ascending order: erased from the last, the others' indices hold.
     report["automatic_masks"] = std::move(found.report);
     for (auto wrong = found.misplaced.rbegin(); wrong != found.misplaced.rend(); ++wrong) leave_out(wrong->index, wrong->reason);
     steps.add("automatic_masks", report["automatic_masks"]["seconds"].get<double>());
@@ -302,20 +304,23 @@ json prepare_scene(const PrepareOptions& o) {
   } else {
     // Resampled masks are soft at the outline: the same 0.5 threshold as every mask nf_gpu reads.
     for (const io::Camera& c : scene.cameras) made.push_back(io::mask_of(io::read_image(undistorted_masks / "images" / c.image.filename())));
-    // The user's masks are the animal: a pose whose mask the other views' silhouettes do not meet
-    // where it says is COLMAP's error, and the view is left out like a stray.
+    // The user's masks are the animal: a pose whose mask the views' silhouettes do not meet where
+    // it says is COLMAP's error, and the view is left out like a stray.
     const auto check_start = std::chrono::steady_clock::now();
     const SilhouetteCheck check = check_silhouettes(scene.cameras, made, animal_box(layout));
     report["silhouettes"] = check.report(scene.cameras);
     for (std::size_t i = scene.cameras.size(); i-- > 0;) {
       const std::string name = scene.cameras[i].image.filename().string();
-      if (check.views[i].disagrees) log::warn("prepare: the mask of ", name, " disagrees with the silhouette the other views carve (IoU ", check.views[i].iou, " against the views' median ", check.median_iou, "); check it in previews/");
+      if (check.views[i].disagrees) log::warn("prepare: the mask of ", name, " disagrees with the silhouette the views carve together (IoU ", check.views[i].iou, " against the views' median ", check.median_iou, "); check it in previews/");
       if (check.views[i].misplaced) leave_out(i, check.reason(i));
     }
     steps.add("silhouette_check", since(check_start));
+    start = std::chrono::steady_clock::now();
   }
   if (scene.cameras.size() < kMinPhotos)
     throw InputError("prepare: only " + std::to_string(scene.cameras.size()) + " of the photos COLMAP placed are plausible (see prepare's warnings); take more photos, in a circle around the animal");
+  // The frame is found again without the poses refuted (without a floor, up is the cameras' mean).
+  if (scene.cameras.size() != before_check) layout = find_layout(scene.cameras, sparse);
   fs::create_directories(work / "images");
   fs::create_directories(work / "masks");
   std::vector<std::string> placed;

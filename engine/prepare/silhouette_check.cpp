@@ -15,8 +15,9 @@ namespace nf::prepare {
 
 namespace {
 
-// The slide search works on masks reduced to this many pixels on their longer side: a misplaced
-// pose moves the animal by a tenth of the photo or more, and the sums over every slide stay cheap.
+// The masks are compared reduced to this many pixels on their longer side, where and slid alike:
+// a refuted pose moves the animal by 4 % of the photo or more (6 px here), and the sums over
+// every slide stay cheap.
 constexpr int kSearchSide = 160;
 
 cv::Mat binary(const std::vector<std::uint8_t>& mask, const io::Camera& c) {
@@ -28,14 +29,13 @@ cv::Mat binary(const std::vector<std::uint8_t>& mask, const io::Camera& c) {
   return m;
 }
 
-double iou(const cv::Mat& a, const cv::Mat& b) {
-  const double either = double(cv::countNonZero(a | b));
-  return either > 0 ? double(cv::countNonZero(a & b)) / either : 0.0;
-}
-
-// The best IoU of `mask` slid over `hull` by up to `reach` pixels (both reduced to kSearchSide), and
-// the slide in full-size pixels: the overlap at every slide is one correlation of the two.
-std::pair<double, double> best_slide(const cv::Mat& mask, const cv::Mat& hull, double reach_share) {
+// The IoU of `mask` with `hull` where it is, its best over slides by up to `reach_share` of the
+// longer side, and that slide in full-size pixels (both masks reduced to kSearchSide): the overlap
+// at every slide is one correlation of the two.
+struct Slide {
+  double iou = 0, best_iou = 0, shift_px = 0;
+};
+Slide best_slide(const cv::Mat& mask, const cv::Mat& hull, double reach_share) {
   const double scale = double(kSearchSide) / double(std::max(mask.cols, mask.rows));
   const cv::Size small(std::max(1, int(std::lround(mask.cols * scale))), std::max(1, int(std::lround(mask.rows * scale))));
   cv::Mat a, b;
@@ -48,14 +48,16 @@ std::pair<double, double> best_slide(const cv::Mat& mask, const cv::Mat& hull, d
   cv::copyMakeBorder(b, padded, reach, reach, reach, reach, cv::BORDER_CONSTANT, cv::Scalar(0));
   cv::matchTemplate(padded, a, overlap, cv::TM_CCORR);
   const double area_a = cv::sum(a)[0], area_b = cv::sum(b)[0];
-  double best = 0, shift = 0;
+  const auto iou_at = [&](int x, int y) {
+    const double both = overlap.at<float>(y, x), either = area_a + area_b - both;
+    return either > 0 ? both / either : 0.0;
+  };
+  Slide s;
+  s.iou = iou_at(reach, reach);
   for (int y = 0; y < overlap.rows; ++y)
-    for (int x = 0; x < overlap.cols; ++x) {
-      const double both = overlap.at<float>(y, x), either = area_a + area_b - both;
-      const double value = either > 0 ? both / either : 0.0;
-      if (value > best + 1e-9) best = value, shift = std::hypot(x - reach, y - reach) / scale;
-    }
-  return {best, shift};
+    for (int x = 0; x < overlap.cols; ++x)
+      if (const double value = iou_at(x, y); value > s.best_iou + 1e-9) s.best_iou = value, s.shift_px = std::hypot(x - reach, y - reach) / scale;
+  return s;
 }
 
 }  // namespace
@@ -108,9 +110,8 @@ SilhouetteCheck check_silhouettes(const std::vector<io::Camera>& cameras, const 
           const int radius = std::max(1, int(std::lround(0.7 * side * c.fx / q.z)));
           cv::circle(hull, cv::Point(int(q.x), int(q.y)), radius, cv::Scalar(255), cv::FILLED);
         }
-      ViewSilhouette& v = out.views[i];
-      v.iou = iou(inside[i], hull);
-      std::tie(v.shifted_iou, v.shift_px) = best_slide(inside[i], hull, o.max_shift);
+      const Slide slide = best_slide(inside[i], hull, o.max_shift);
+      out.views[i].iou = slide.iou, out.views[i].shifted_iou = slide.best_iou, out.views[i].shift_px = slide.shift_px;
     }
   });
   std::vector<double> ious;
@@ -136,7 +137,7 @@ std::string SilhouetteCheck::reason(std::size_t i) const {
   if (!v.misplaced) return "";
   char why[240];
   std::snprintf(why, sizeof why,
-                "its mask meets the silhouette the other views carve only %.0f px away (IoU %.2f where it is, %.2f moved; the views' median %.2f): "
+                "its mask meets the silhouette the views carve together only %.0f px away (IoU %.2f where it is, %.2f moved; the views' median %.2f): "
                 "COLMAP's pose is off",
                 v.shift_px, v.iou, v.shifted_iou, median_iou);
   return why;

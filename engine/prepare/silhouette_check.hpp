@@ -2,11 +2,12 @@
 // A pose COLMAP got a little wrong (a photo matched to the wrong copy of a repeating pattern: a
 // fraction of the animal's size off, a few degrees turned) still aims at the animal, so
 // stray_cameras keeps it, and its reprojection error is small (its matches agree with the wrong
-// pose). What gives it away is the animal its photo shows: not where the other views' silhouettes
-// put it. Each view's mask is compared with the visual hull the views carve together, drawn back
-// into that view; the carving is tolerant (a fifth of the views may miss a voxel), so one wrong view
-// does not carve the others. Where a view disagrees, sliding its mask over the drawn hull tells a
-// wrong pose (the mask fits once moved) from a wrong mask (it fits nowhere).
+// pose). What gives it away is the animal its photo shows: not where the views' silhouettes put it.
+// Each view's mask is compared with the visual hull the views carve together (its own among them),
+// drawn back into that view; the carving is tolerant (a fifth of the views may miss a voxel, at
+// least one), so a wrong view among ten or more does not carve the others. Where a view disagrees,
+// sliding its mask over the drawn hull tells a wrong pose (the mask fits once moved) from a wrong
+// mask (it fits nowhere). Both are compared reduced to 160 px on the longer side.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -27,7 +28,7 @@ struct SilhouetteOptions {
 };
 
 struct ViewSilhouette {
-  double iou = 0;          // the view's mask against the hull drawn back into it
+  double iou = 0;          // the view's mask against the hull drawn back into it (reduced to 160 px)
   double shifted_iou = 0;  // the best IoU over slides of the mask
   double shift_px = 0;     // the slide that gives it, in photo pixels
   bool misplaced = false;  // the mask fits the hull once moved: the pose is wrong

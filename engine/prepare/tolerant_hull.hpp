@@ -1,7 +1,8 @@
 #pragma once
 // The visual hull prepare carves from masks, tolerant of a few wrong ones: a point lies in it when
 // at least 3 views see it and all but a fifth of them (at least one may miss) see it inside their
-// masks. Shared by the automatic masks and the pose check; nf_prepare's own (OpenCV) header.
+// masks; and the IoU the masks are compared by. Shared by the automatic masks and the pose check;
+// nf_prepare's own (OpenCV) header.
 #include <algorithm>
 #include <vector>
 
@@ -24,6 +25,12 @@ inline bool in_tolerant_hull(const std::vector<io::Camera>& cameras, const std::
     misses += masks[i].at<std::uint8_t>(int(q.y), int(q.x)) == 0;
   }
   return seen >= 3 && misses <= std::max<std::size_t>(1, seen / 5);
+}
+
+// The IoU of two CV_8U masks (non-zero inside); 0 when both are empty.
+inline double mask_iou(const cv::Mat& a, const cv::Mat& b) {
+  const double either = double(cv::countNonZero(a | b));
+  return either > 0 ? double(cv::countNonZero(a & b)) / either : 0.0;
 }
 
 }  // namespace nf::prepare
