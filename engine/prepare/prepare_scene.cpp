@@ -271,34 +271,30 @@ json prepare_scene(const PrepareOptions& o) {
       if (std::none_of(strays.begin(), strays.end(), [&](const StrayCamera& s) { return s.index == jump.index; })) strays.push_back(jump);
     std::sort(strays.begin(), strays.end(), [](const StrayCamera& a, const StrayCamera& b) { return a.index < b.index; });
   }
+  // Poses left out (indices in ascending order, erased from the last so the others hold), with
+  // their masks once there are masks; the layout is then found again without them.
+  std::vector<std::vector<std::uint8_t>> made;
   report["stray_cameras"] = json::array();
-  for (auto stray = strays.rbegin(); stray != strays.rend(); ++stray) {
-    const std::string name = scene.cameras[stray->index].image.filename().string();
-    report["stray_cameras"].push_back({{"photo", name}, {"reason", stray->reason}});
-    log::warn("prepare: COLMAP's pose for ", name, " is left out: ", stray->reason);
-    scene.cameras.erase(scene.cameras.begin() + std::ptrdiff_t(stray->index));
-  }
-  if (!strays.empty()) {
+  const auto leave_out = [&](const std::vector<StrayCamera>& wrong) {
+    for (auto stray = wrong.rbegin(); stray != wrong.rend(); ++stray) {
+      const std::string name = scene.cameras[stray->index].image.filename().string();
+      report["stray_cameras"].push_back({{"photo", name}, {"reason", stray->reason}});
+      log::warn("prepare: COLMAP's pose for ", name, " is left out: ", stray->reason);
+      scene.cameras.erase(scene.cameras.begin() + std::ptrdiff_t(stray->index));
+      if (!made.empty()) made.erase(made.begin() + std::ptrdiff_t(stray->index));
+    }
+    if (wrong.empty()) return;
     if (scene.cameras.size() < kMinPhotos)
       throw InputError("prepare: only " + std::to_string(scene.cameras.size()) + " of the photos COLMAP placed are plausible (see prepare's warnings); take more photos, in a circle around the animal");
     layout = find_layout(scene.cameras, sparse);
-  }
-  std::vector<std::vector<std::uint8_t>> made;
-  const std::size_t before_check = scene.cameras.size();
-  // A pose the masks refute (silhouette_check.hpp) is left out like a stray, with its mask.
-  const auto leave_out = [&](std::size_t i, const std::string& reason) {
-    const std::string name = scene.cameras[i].image.filename().string();
-    report["stray_cameras"].push_back({{"photo", name}, {"reason", reason}});
-    log::warn("prepare: COLMAP's pose for ", name, " is left out: ", reason);
-    scene.cameras.erase(scene.cameras.begin() + std::ptrdiff_t(i));
-    made.erase(made.begin() + std::ptrdiff_t(i));
   };
+  leave_out(strays);
+  // Then those whose masks refute them (silhouette_check.hpp).
   if (automatic) {
     AutoMasks found = automatic_masks(scene, sparse, layout);
     made = std::move(found.masks);
-    // found.misplaced is in ascending order: erased from the last, the others' indices hold.
     report["automatic_masks"] = std::move(found.report);
-    for (auto wrong = found.misplaced.rbegin(); wrong != found.misplaced.rend(); ++wrong) leave_out(wrong->index, wrong->reason);
+    leave_out(found.misplaced);
     steps.add("automatic_masks", report["automatic_masks"]["seconds"].get<double>());
     start = std::chrono::steady_clock::now();
   } else {
@@ -309,18 +305,17 @@ json prepare_scene(const PrepareOptions& o) {
     const auto check_start = std::chrono::steady_clock::now();
     const SilhouetteCheck check = check_silhouettes(scene.cameras, made, animal_box(layout));
     report["silhouettes"] = check.report(scene.cameras);
-    for (std::size_t i = scene.cameras.size(); i-- > 0;) {
-      const std::string name = scene.cameras[i].image.filename().string();
-      if (check.views[i].disagrees) log::warn("prepare: the mask of ", name, " disagrees with the silhouette the views carve together (IoU ", check.views[i].iou, " against the views' median ", check.median_iou, "); check it in previews/");
-      if (check.views[i].misplaced) leave_out(i, check.reason(i));
+    std::vector<StrayCamera> refuted;
+    for (std::size_t i = 0; i < scene.cameras.size(); ++i) {
+      if (check.views[i].disagrees)
+        log::warn("prepare: the mask of ", scene.cameras[i].image.filename().string(), " disagrees with the silhouette the views carve together (IoU ",
+                  check.views[i].iou, " against the views' median ", check.median_iou, "); check it in previews/");
+      if (check.views[i].misplaced) refuted.push_back({i, check.reason(i)});
     }
+    leave_out(refuted);
     steps.add("silhouette_check", since(check_start));
     start = std::chrono::steady_clock::now();
   }
-  if (scene.cameras.size() < kMinPhotos)
-    throw InputError("prepare: only " + std::to_string(scene.cameras.size()) + " of the photos COLMAP placed are plausible (see prepare's warnings); take more photos, in a circle around the animal");
-  // The frame is found again without the poses refuted (without a floor, up is the cameras' mean).
-  if (scene.cameras.size() != before_check) layout = find_layout(scene.cameras, sparse);
   fs::create_directories(work / "images");
   fs::create_directories(work / "masks");
   std::vector<std::string> placed;

@@ -6,6 +6,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "engine/core/error.hpp"
+#include "engine/geometry/mesh_tools.hpp"
 #include "engine/io/image.hpp"
 #include "engine/io/mesh.hpp"
 #include "engine/io/scene.hpp"
@@ -31,12 +32,8 @@ struct Scene {
     scene = io::read_scene(root);
     for (const io::Camera& c : scene.cameras) masks.push_back(io::mask_of(io::read_image(c.mask)));
     // The box a layout would give: the true body's, generously grown, standing on its lowest point.
-    const geometry::Mesh body = io::read_mesh(root / "gt" / "outer.ply");
-    glm::dvec3 lo(1e30), hi(-1e30);
-    for (std::size_t v = 0; v < body.vertex_count(); ++v) {
-      const glm::dvec3 p(body.positions[3 * v], body.positions[3 * v + 1], body.positions[3 * v + 2]);
-      lo = glm::min(lo, p), hi = glm::max(hi, p);
-    }
+    const geometry::Bounds bounds = geometry::mesh_bounds(io::read_mesh(root / "gt" / "outer.ply"));
+    const glm::dvec3 lo(bounds.lo), hi(bounds.hi);
     radius = 0.5 * glm::length(hi - lo);
     box.base = glm::dvec3(0.5 * (lo.x + hi.x), lo.y, 0.5 * (lo.z + hi.z));
     box.u = {1, 0, 0}, box.v = {0, 0, 1}, box.n = {0, 1, 0};
