@@ -134,9 +134,8 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   if (!has_floor) log::warn("prepare: no floor found among the sparse points; the automatic masks rely on the animal's distance from the cameras alone");
 
   const AnimalBox extent = animal_box(layout);
-  const glm::dvec3 base = extent.base, lo = extent.lo, hi = extent.hi;
+  const glm::dvec3 base = extent.base;
   const double horizontal = extent.horizontal;
-  const auto world = [&](const glm::dvec3& local) { return extent.world(local); };
   const std::vector<glm::dvec3> corners = extent.corners();
 
   const std::size_t views = scene.cameras.size();
@@ -201,43 +200,21 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   // The visual hull of the cuts: voxels of the box that the views in whose frame they lie see inside
   // their cuts, all but a fifth (a few wrong cuts must not carve the others); drawn back into each
   // view as discs of the voxel's size.
-  const double side = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) / double(o.hull_cells);
-  const glm::uvec3 cells(glm::max(glm::dvec3(1.0), glm::ceil((hi - lo) / side)));
-  const auto voxel_centre = [&](std::size_t k) {
-    return world(lo + side * (glm::dvec3(double(k % cells.x), double((k / cells.x) % cells.y), double(k / (std::size_t(cells.x) * cells.y))) + 0.5));
-  };
+  const HullGrid grid(extent, o.hull_cells);
   std::vector<std::size_t> animal_cells;
-  for (const glm::dvec3& p : animal_points) {
-    const glm::dvec3 cell = glm::floor((extent.local(p) - lo) / side);
-    if (glm::all(glm::greaterThanEqual(cell, glm::dvec3(0.0))) && glm::all(glm::lessThan(cell, glm::dvec3(cells))))
-      animal_cells.push_back((std::size_t(cell.z) * cells.y + std::size_t(cell.y)) * cells.x + std::size_t(cell.x));
-  }
+  for (const glm::dvec3& p : animal_points)
+    if (const std::optional<std::size_t> cell = grid.cell_of(p)) animal_cells.push_back(*cell);
   const auto carve = [&] {
-    const std::size_t total = std::size_t(cells.x) * cells.y * cells.z;
-    std::vector<char> kept(total, 0);
-    parallel_for(total, [&](std::size_t k0, std::size_t k1) {
-      for (std::size_t k = k0; k < k1; ++k) {
-        kept[k] = in_tolerant_hull(scene.cameras, cut, voxel_centre(k), &left_out);
-      }
-    });
     // The animal is one solid: a cluster of voxels apart from the one its sparse points lie in is
     // where a few views' cuts took the same patch of wall or floor, and drawn back it would hold
     // that patch in their masks.
-    const std::vector<char> animal_voxels = animal_components(kept, cells, animal_cells);
+    const std::vector<char> animal_voxels = animal_components(grid.carve(scene.cameras, cut, &left_out), grid.cells, animal_cells);
     std::vector<glm::dvec3> voxels;
-    for (std::size_t k = 0; k < total; ++k)
-      if (animal_voxels[k])
-        voxels.push_back(voxel_centre(k));
+    for (std::size_t k = 0; k < grid.total(); ++k)
+      if (animal_voxels[k]) voxels.push_back(grid.centre(k));
+    // Discs a little wider than a voxel, raised: the cuts grow back inside a hull that is not short of the animal.
     parallel_for(views, [&](std::size_t i0, std::size_t i1) {
-      for (std::size_t i = i0; i < i1; ++i) {
-        const io::Camera& c = scene.cameras[i];
-        hull_masks[i] = cv::Mat::zeros(int(c.height), int(c.width), CV_8U);
-        for (const glm::dvec3& p : voxels)
-          if (const glm::dvec3 q = c.project(p); q.z > 0) {
-            const int radius = std::max(1, int(std::ceil(0.8 * side * c.fx / q.z)));
-            cv::circle(hull_masks[i], cv::Point(int(q.x), int(q.y)), radius, cv::Scalar(255), cv::FILLED);
-          }
-      }
+      for (std::size_t i = i0; i < i1; ++i) hull_masks[i] = draw_voxels(scene.cameras[i], voxels, grid.side, 0.8, true);
     });
     return voxels.size();
   };
@@ -321,7 +298,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
     log::warn("prepare: ", recut.size() + replaced.size(), " automatic mask(s) lost the animal or caught something else, and were made again from the other views' hull: ",
               recut.empty() ? replaced.front() : recut.front(), recut.size() + replaced.size() > 1 ? ", ..." : "");
   report["hull_voxels"] = voxels;
-  report["hull_voxel_size"] = side;
+  report["hull_voxel_size"] = grid.side;
   report["median_hull_iou"] = median_agreement;
   json per_view = json::array();
   std::vector<std::string> flagged;

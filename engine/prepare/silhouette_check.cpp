@@ -70,45 +70,29 @@ SilhouetteCheck check_silhouettes(const std::vector<io::Camera>& cameras, const 
   for (std::size_t i = 0; i < views; ++i) inside[i] = mask_view(masks.at(i), cameras[i]);
 
   // The tolerant hull (tolerant_hull.hpp), as the automatic masks carve it.
-  const glm::dvec3 extent = box.hi - box.lo;
-  const double side = std::max({extent.x, extent.y, extent.z}) / double(o.cells);
-  const glm::uvec3 cells(glm::max(glm::dvec3(1.0), glm::ceil(extent / side)));
-  const std::size_t total = std::size_t(cells.x) * cells.y * cells.z;
-  const auto index = [&](std::size_t x, std::size_t y, std::size_t z) { return (z * cells.y + y) * cells.x + x; };
-  const auto centre = [&](std::size_t k) {
-    return box.world(box.lo + side * (glm::dvec3(double(k % cells.x), double((k / cells.x) % cells.y), double(k / (std::size_t(cells.x) * cells.y))) + 0.5));
-  };
-  std::vector<char> kept(total, 0);
-  parallel_for(total, [&](std::size_t k0, std::size_t k1) {
-    for (std::size_t k = k0; k < k1; ++k) {
-      kept[k] = in_tolerant_hull(cameras, inside, centre(k));
-    }
-  });
+  const HullGrid grid(box, o.cells);
+  const std::vector<char> kept = grid.carve(cameras, inside);
   // A solid's outline is its surface's: only voxels with an empty 6-neighbour are drawn back.
   std::vector<glm::dvec3> surface;
+  const glm::uvec3 cells = grid.cells;
   for (std::size_t z = 0; z < cells.z; ++z)
     for (std::size_t y = 0; y < cells.y; ++y)
       for (std::size_t x = 0; x < cells.x; ++x) {
-        const std::size_t k = index(x, y, z);
+        const std::size_t k = grid.index(x, y, z);
         if (!kept[k]) continue;
         ++out.hull_voxels;
-        const bool boundary = x == 0 || y == 0 || z == 0 || x + 1 == cells.x || y + 1 == cells.y || z + 1 == cells.z || !kept[index(x - 1, y, z)] ||
-                              !kept[index(x + 1, y, z)] || !kept[index(x, y - 1, z)] || !kept[index(x, y + 1, z)] || !kept[index(x, y, z - 1)] ||
-                              !kept[index(x, y, z + 1)];
-        if (boundary) surface.push_back(centre(k));
+        const bool boundary = x == 0 || y == 0 || z == 0 || x + 1 == cells.x || y + 1 == cells.y || z + 1 == cells.z ||
+                              !kept[grid.index(x - 1, y, z)] || !kept[grid.index(x + 1, y, z)] || !kept[grid.index(x, y - 1, z)] ||
+                              !kept[grid.index(x, y + 1, z)] || !kept[grid.index(x, y, z - 1)] || !kept[grid.index(x, y, z + 1)];
+        if (boundary) surface.push_back(grid.centre(k));
       }
   if (out.hull_voxels == 0) return out;
 
   parallel_for(views, [&](std::size_t i0, std::size_t i1) {
     for (std::size_t i = i0; i < i1; ++i) {
-      const io::Camera& c = cameras[i];
-      cv::Mat hull = cv::Mat::zeros(int(c.height), int(c.width), CV_8U);
-      for (const glm::dvec3& p : surface)
-        if (const glm::dvec3 q = c.project(p); q.z > 0) {
-          // A disc as wide as the voxel (rounded, not raised: a pixel more all round fattens thin legs).
-          const int radius = std::max(1, int(std::lround(0.7 * side * c.fx / q.z)));
-          cv::circle(hull, cv::Point(int(q.x), int(q.y)), radius, cv::Scalar(255), cv::FILLED);
-        }
+      // Discs as wide as a voxel, rounded, not raised: a pixel more all round fattens thin legs
+      // against the mask compared.
+      const cv::Mat hull = draw_voxels(cameras[i], surface, grid.side, 0.7, false);
       const Slide slide = best_slide(inside[i], hull, o.max_shift);
       out.views[i].iou = slide.iou, out.views[i].shifted_iou = slide.best_iou, out.views[i].shift_px = slide.shift_px;
     }

@@ -1,36 +1,44 @@
 #pragma once
 // The visual hull prepare carves from masks, tolerant of a few wrong ones: a point lies in it when
 // at least 3 views see it and all but a fifth of them (at least one may miss) see it inside their
-// masks; and the IoU the masks are compared by. Shared by the automatic masks and the pose check;
-// nf_prepare's own (OpenCV) header.
-#include <algorithm>
+// masks; the voxel grid it is carved on (the animal's box, scene_layout.hpp), the hull drawn back
+// into a view, and the IoU the masks are compared by. Shared by the automatic masks and the pose
+// check; nf_prepare's own (OpenCV) header.
+#include <cstdint>
+#include <optional>
 #include <vector>
 
 #include <glm/glm.hpp>
 #include <opencv2/core.hpp>
 
 #include "engine/io/scene.hpp"
+#include "engine/prepare/scene_layout.hpp"
 
 namespace nf::prepare {
 
 // `masks`: per camera, CV_8U, non-zero inside; `left_out` (when given): views that take no part.
-inline bool in_tolerant_hull(const std::vector<io::Camera>& cameras, const std::vector<cv::Mat>& masks, const glm::dvec3& p,
-                             const std::vector<char>* left_out = nullptr) {
-  std::size_t misses = 0, seen = 0;
-  for (std::size_t i = 0; i < cameras.size(); ++i) {
-    if (left_out && (*left_out)[i]) continue;
-    const glm::dvec3 q = cameras[i].project(p);
-    if (q.z <= 0 || q.x < 0 || q.y < 0 || q.x >= masks[i].cols || q.y >= masks[i].rows) continue;
-    ++seen;
-    misses += masks[i].at<std::uint8_t>(int(q.y), int(q.x)) == 0;
-  }
-  return seen >= 3 && misses <= std::max<std::size_t>(1, seen / 5);
-}
+bool in_tolerant_hull(const std::vector<io::Camera>& cameras, const std::vector<cv::Mat>& masks, const glm::dvec3& p,
+                      const std::vector<char>* left_out = nullptr);
+
+// Cubic voxels over the animal's box, `cells` along its longest side (x fastest, then y, then z).
+struct HullGrid {
+  HullGrid(const AnimalBox& box, std::uint32_t cells_on_longest_side);
+  AnimalBox box;
+  double side = 0;  // a voxel's edge, scene units
+  glm::uvec3 cells{1};
+  std::size_t total() const { return std::size_t(cells.x) * cells.y * cells.z; }
+  std::size_t index(std::size_t x, std::size_t y, std::size_t z) const { return (z * cells.y + y) * cells.x + x; }
+  glm::dvec3 centre(std::size_t k) const;           // world
+  std::optional<std::size_t> cell_of(const glm::dvec3& world) const;  // none outside the box
+  // Per voxel, whether its centre lies in the tolerant hull of `masks`.
+  std::vector<char> carve(const std::vector<io::Camera>& cameras, const std::vector<cv::Mat>& masks, const std::vector<char>* left_out = nullptr) const;
+};
+
+// Voxel centres drawn into a camera's frame as filled discs of `radius_share` x the voxel's edge
+// (at least a pixel), rounded up or to the nearest pixel: CV_8U, 255 inside.
+cv::Mat draw_voxels(const io::Camera& camera, const std::vector<glm::dvec3>& centres, double side, double radius_share, bool round_up);
 
 // The IoU of two CV_8U masks (non-zero inside); 0 when both are empty.
-inline double mask_iou(const cv::Mat& a, const cv::Mat& b) {
-  const double either = double(cv::countNonZero(a | b));
-  return either > 0 ? double(cv::countNonZero(a & b)) / either : 0.0;
-}
+double mask_iou(const cv::Mat& a, const cv::Mat& b);
 
 }  // namespace nf::prepare
