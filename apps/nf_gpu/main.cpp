@@ -437,6 +437,12 @@ int main(int argc, char** argv) {
   synth->add_option("--views", synth_options.views, "number of views, on two camera rings (default 36)")->check(CLI::Range(1, 10000));
   synth->add_option("--res", synth_options.resolution, "image width and height in pixels (default 512)")->check(CLI::Range(8, 8192));
   synth->add_option("--seed", synth_options.seed, "varies proportions, pose, fur and placement (default 1)");
+  synth->add_option("--proportion-spread", synth_options.proportion_spread,
+                    "each body proportion scaled by a seeded factor within 1 +- this (default 0.06; 0.2-0.3 for bodies far from the family's)")
+      ->check(CLI::Range(0.0, 0.5));
+  synth->add_option("--fur-length-spread", synth_options.fur_length_spread,
+                    "each region's fur length scaled by a seeded factor within 1 +- this (default 0: the preset's lengths)")
+      ->check(CLI::Range(0.0, 0.9));
   synth->add_option("--strands", synth_options.strands, "ground-truth strands (default 100000)")->check(CLI::Range(1, 20000000));
   synth->add_option("--spp-axis", synth_options.samples_per_axis, "anti-aliasing: s x s samples per pixel (default 3)")->check(CLI::Range(1, 16));
   synth->add_option("--shading", synth_options.shading, "how strands reflect light: kajiya-kay (default), two-lobe (Marschner's two highlights), matte")

@@ -343,8 +343,14 @@ QuadrupedProportions vary_proportions(const QuadrupedProportions& p, unsigned se
                    &out.neck_radius, &out.head_radius, &out.muzzle_length, &out.muzzle_radius, &out.ear_length,
                    &out.ear_width, &out.eye_radius, &out.tail_length, &out.tail_radius_base, &out.tail_radius_tip})
     *f *= u(rng);
-  out.neck_pitch_deg += 20.0f * (u(rng) - 1.0f) / amount;
-  out.tail_pitch_deg += 40.0f * (u(rng) - 1.0f) / amount;
+  // The pitches swing +-20 and +-40 degrees at the default spread, less below it and up to half
+  // as much again above it (a wider family, not a broken one).
+  const float swing = std::min(1.5f, amount / 0.06f);  // exactly 1 at the default
+  const float neck = u(rng), tail = u(rng);
+  if (amount > 0) {
+    out.neck_pitch_deg += 20.0f * (neck - 1.0f) / amount * swing;
+    out.tail_pitch_deg += 40.0f * (tail - 1.0f) / amount * swing;
+  }
   out.rear_leg_length = std::max(out.rear_leg_length, 0.9f * out.front_leg_length);
   return out;
 }

@@ -38,7 +38,8 @@ struct QuadrupedProportions {
 const std::vector<std::string>& known_animals();
 // Throws UsageError listing the known animals.
 QuadrupedProportions animal_proportions(const std::string& animal);
-// Every proportion scaled by an independent factor in [1 - amount, 1 + amount] (seeded).
+// Every proportion scaled by an independent factor in [1 - amount, 1 + amount] (seeded); the neck's
+// and tail's pitch swing +-20 and +-40 degrees at the default amount (see the definition).
 QuadrupedProportions vary_proportions(const QuadrupedProportions& p, unsigned seed, float amount = 0.06f);
 
 struct QuadrupedBuildOptions {

@@ -69,6 +69,10 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
   if (o.strands == 0) throw UsageError("synth: --strands must be >= 1");
   if (!(o.hair_width > 0 && o.hair_width <= 100)) throw UsageError("synth: --hair-width must lie in (0, 100], got " + std::to_string(o.hair_width));
   if (!(o.photo_noise >= 0 && o.photo_noise <= 255)) throw UsageError("synth: --noise must lie in [0, 255], got " + std::to_string(o.photo_noise));
+  if (!(o.proportion_spread >= 0 && o.proportion_spread <= 0.5f))
+    throw UsageError("synth: --proportion-spread must lie in [0, 0.5], got " + std::to_string(o.proportion_spread));
+  if (!(o.fur_length_spread >= 0 && o.fur_length_spread <= 0.9f))
+    throw UsageError("synth: --fur-length-spread must lie in [0, 0.9], got " + std::to_string(o.fur_length_spread));
   hair_shading_from(o.shading);  // an unknown shading fails before any work
   if (o.photo_format != "png" && o.photo_format != "jpeg") throw UsageError("synth: --photo-format must be png or jpeg, got " + o.photo_format);
   if (o.camera_path != "rings" && o.camera_path != "handheld") throw UsageError("synth: --path must be rings or handheld, got " + o.camera_path);
@@ -89,7 +93,7 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
   json timings;
 
   // Body: the family's proportions for the animal, varied by the seed, posed mildly.
-  const body::QuadrupedProportions proportions = body::vary_proportions(body::animal_proportions(o.animal), o.seed);
+  const body::QuadrupedProportions proportions = body::vary_proportions(body::animal_proportions(o.animal), o.seed, o.proportion_spread);
   const body::BodyModel model = body::build_quadruped(proportions, {o.body_voxel});
   body::BodyParams params = body::random_pose(model, o.seed);
   std::mt19937 rng(o.seed + 101);
@@ -105,6 +109,16 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
   // Fur from the animal's knowledge preset; the ground-truth knowledge carries the true eye distance.
   knowledge::Knowledge know = knowledge::preset(o.animal);
   know.eye_distance_cm = eyes.distance() * kCmPerUnit;
+  if (o.fur_length_spread > 0) {
+    std::mt19937 length_rng(o.seed * 7919u + 3u);
+    std::uniform_real_distribution<float> factor(1.0f - o.fur_length_spread, 1.0f + o.fur_length_spread);
+    for (std::optional<knowledge::RegionKnowledge>& region : know.regions)
+      if (region) {
+        const float f = factor(length_rng);
+        region->length_cm *= f;
+        region->thickness_cm *= f;
+      }
+  }
   const FurStyle style = fur_style(o.animal);
   GrowOptions grow;
   grow.strand_count = o.strands, grow.points_per_strand = o.points_per_strand, grow.seed = o.seed;
@@ -245,7 +259,8 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
       {"strands", {{"count", fur.strands.strand_count()}, {"points_per_strand", o.points_per_strand},
                    {"render_radius", look.radius * frame.scale}}},
       {"body", {{"model", model.name}, {"vertices", bald.vertex_count()}, {"triangles", bald.triangle_count()},
-                {"shape", shape}, {"joint_rotations", rotations}, {"torso_length", proportions.torso_length}}},
+                {"shape", shape}, {"joint_rotations", rotations}, {"torso_length", proportions.torso_length},
+                {"proportion_spread", o.proportion_spread}, {"fur_length_spread", o.fur_length_spread}}},
       {"outer", {{"method", "morphological closing of body + strands, then marching cubes"},
                  {"voxel", envelope.voxel * frame.scale}, {"closing_radius", envelope.closing_radius * frame.scale},
                  {"vertices", envelope.mesh.vertex_count()}}},

@@ -23,6 +23,12 @@ struct SynthOptions {
   std::uint32_t points_per_strand = 100;
   std::uint32_t samples_per_axis = 3;  // anti-aliasing: s x s samples per pixel
   float body_voxel = 0;                // metres; 0: the body model's default
+  // How far an animal may stray from its family, to judge the later stages on bodies and coats
+  // wider than the presets: every body proportion scaled by a seeded factor in [1 - s, 1 + s]
+  // (and the neck's and tail's pitch, body::vary_proportions), and each region's fur length by one in
+  // [1 - f, 1 + f]. gt/knowledge.json holds the lengths grown.
+  float proportion_spread = 0.06f;
+  float fur_length_spread = 0;
   // The world frame the files are written in (world_frame.hpp): "y-up-m" (y up, metres) or
   // "z-up-mm" (z up, millimetres, the animal metres from the origin). The animal, the photos and
   // the masks are the same in both; only the coordinates of everything else change.

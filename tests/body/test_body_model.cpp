@@ -197,6 +197,21 @@ TEST_CASE("building is deterministic, random poses are mild and seed 0 is the re
   const QuadrupedProportions v = vary_proportions(p, 3, 0.06f);
   CHECK(v.torso_length != p.torso_length);
   CHECK(std::fabs(v.torso_length / p.torso_length - 1) <= 0.0601f);
+  // A wider family (synth --proportion-spread): every proportion within the amount, some beyond the
+  // default's, the pitches swinging up to half as much again; none at all at 0.
+  const QuadrupedProportions wide = vary_proportions(p, 3, 0.25f), none = vary_proportions(p, 3, 0.0f);
+  float widest = 0;
+  for (auto member : {&QuadrupedProportions::torso_length, &QuadrupedProportions::head_radius, &QuadrupedProportions::front_leg_length,
+                      &QuadrupedProportions::tail_length, &QuadrupedProportions::ear_length, &QuadrupedProportions::muzzle_length}) {
+    CHECK(std::fabs(wide.*member / p.*member - 1) <= 0.2501f);
+    CHECK(none.*member == p.*member);
+    widest = std::max(widest, std::fabs(wide.*member / p.*member - 1));
+  }
+  CHECK(widest > 0.06f);
+  CHECK(std::fabs(wide.neck_pitch_deg - p.neck_pitch_deg) <= 30.01f);
+  CHECK(std::fabs(wide.tail_pitch_deg - p.tail_pitch_deg) <= 60.01f);
+  CHECK(none.neck_pitch_deg == p.neck_pitch_deg);
+  CHECK(none.tail_pitch_deg == p.tail_pitch_deg);
 }
 
 TEST_CASE("bad models and unknown animals are refused with the field named") {

@@ -392,6 +392,35 @@ TEST_CASE("the photos' look: shading models, hair width and sensor noise change 
   CHECK(io::read_image(root / "clean" / "masks" / "000.png").pixels == io::read_image(root / "noisy" / "masks" / "000.png").pixels);
   o.photo_noise = -1;
   CHECK_THROWS_AS(synth::synthesize_scene(root / "bad", o), UsageError);
+
+  fs::remove_all(root);
+}
+
+TEST_CASE("a coat drawn wider than the preset: each region's fur length within the spread, the truth saying what grew") {
+  const fs::path root = fs::temp_directory_path() / "nf_synth_spread_test";
+  fs::remove_all(root);
+  synth::SynthOptions o;
+  o.animal = "cat", o.views = 1, o.resolution = 64, o.seed = 2, o.strands = 3000, o.samples_per_axis = 1, o.body_voxel = 0.01f;
+  o.fur_length_spread = 0.4f, o.proportion_spread = 0.2f;
+  const json spread = synth::synthesize_scene(root / "spread", o);
+  CHECK(spread["body"]["fur_length_spread"].get<double>() == doctest::Approx(0.4));
+  CHECK(spread["body"]["proportion_spread"].get<double>() == doctest::Approx(0.2));
+  const knowledge::Knowledge preset = knowledge::preset("cat"), grown = knowledge::read_knowledge(root / "spread" / "gt" / "knowledge.json");
+  double widest = 0;
+  for (std::size_t r = 0; r < preset.regions.size(); ++r) {
+    if (!preset.regions[r] || preset.regions[r]->length_cm <= 0) continue;
+    REQUIRE(grown.regions[r]);
+    const double f = grown.regions[r]->length_cm / preset.regions[r]->length_cm;
+    CHECK(f >= 0.6 - 1e-4);
+    CHECK(f <= 1.4 + 1e-4);
+    widest = std::max(widest, std::abs(f - 1));
+  }
+  CHECK(widest > 0.1);
+  o.fur_length_spread = 0.95f;
+  CHECK_THROWS_WITH_AS(synth::synthesize_scene(root / "bad", o), doctest::Contains("--fur-length-spread"), UsageError);
+  o.fur_length_spread = 0, o.proportion_spread = 0.6f;
+  CHECK_THROWS_WITH_AS(synth::synthesize_scene(root / "bad", o), doctest::Contains("--proportion-spread"), UsageError);
+  CHECK_FALSE(fs::exists(root / "bad"));
   fs::remove_all(root);
 }
 
