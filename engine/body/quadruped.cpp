@@ -351,6 +351,17 @@ QuadrupedProportions vary_proportions(const QuadrupedProportions& p, unsigned se
     out.neck_pitch_deg += 20.0f * (neck - 1.0f) / amount * swing;
     out.tail_pitch_deg += 40.0f * (tail - 1.0f) / amount * swing;
   }
+  // The head's parts keep to the head: drawn apart they could make a neck wider than the head that
+  // swallows the eyes. Their ratios to the head stay within 13 % of the family's, which the default
+  // amount never reaches (1.06 / 0.94), so only a wider spread is held by it; there the neck is
+  // also no wider against the head than the family's (a panda's neck is already as wide as its head).
+  const float head = out.head_radius / p.head_radius;
+  for (auto member : {&QuadrupedProportions::neck_radius, &QuadrupedProportions::muzzle_length, &QuadrupedProportions::muzzle_radius,
+                      &QuadrupedProportions::ear_length, &QuadrupedProportions::ear_width, &QuadrupedProportions::eye_radius}) {
+    const float highest = member == &QuadrupedProportions::neck_radius && amount > 0.06f ? 1.0f : 1.13f;
+    if (const float ratio = out.*member / p.*member / head; ratio < 1.0f / 1.13f || ratio > highest)
+      out.*member = p.*member * head * std::clamp(ratio, 1.0f / 1.13f, highest);
+  }
   out.rear_leg_length = std::max(out.rear_leg_length, 0.9f * out.front_leg_length);
   return out;
 }

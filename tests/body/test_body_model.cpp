@@ -212,6 +212,20 @@ TEST_CASE("building is deterministic, random poses are mild and seed 0 is the re
   CHECK(std::fabs(wide.tail_pitch_deg - p.tail_pitch_deg) <= 60.01f);
   CHECK(none.neck_pitch_deg == p.neck_pitch_deg);
   CHECK(none.tail_pitch_deg == p.tail_pitch_deg);
+  // Drawn that wide, every animal still has its eyes: the head's parts keep to the head (a neck
+  // drawn wider than a shrunken head once swallowed them on four animals of seed 2).
+  for (const std::string& animal : known_animals())
+    for (unsigned seed : {2u, 6u}) {
+      const QuadrupedProportions family = animal_proportions(animal), drawn = vary_proportions(family, seed, 0.25f);
+      CHECK(drawn.neck_radius / drawn.head_radius <= family.neck_radius / family.head_radius * 1.0001f);
+      const BodyModel m = build_quadruped(drawn, {});
+      std::size_t eye_vertices[2] = {0, 0};
+      for (std::size_t i = 0; i < m.regions.size(); ++i)
+        if (m.regions[i] == region_id(Region::eyes)) ++eye_vertices[m.template_vertices[3 * i] >= 0 ? 0 : 1];
+      INFO(animal, " seed ", seed);
+      CHECK(eye_vertices[0] >= 15);
+      CHECK(eye_vertices[1] >= 15);
+    }
 }
 
 TEST_CASE("bad models and unknown animals are refused with the field named") {
