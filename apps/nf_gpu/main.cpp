@@ -438,8 +438,8 @@ int main(int argc, char** argv) {
   synth->add_option("--res", synth_options.resolution, "image width and height in pixels (default 512)")->check(CLI::Range(8, 8192));
   synth->add_option("--seed", synth_options.seed, "varies proportions, pose, fur and placement (default 1)");
   synth->add_option("--proportion-spread", synth_options.proportion_spread,
-                    "each body proportion scaled by a seeded factor within 1 +- this (default 0.06; 0.2-0.3 for bodies far from the family's)")
-      ->check(CLI::Range(0.0, 0.5));
+                    "each body proportion scaled by a seeded factor within 1 +- this (default 0.06; up to 0.3 for bodies far from the family's)")
+      ->check(CLI::Range(0.0, 0.3));
   synth->add_option("--fur-length-spread", synth_options.fur_length_spread,
                     "each region's fur length scaled by a seeded factor within 1 +- this (default 0: the preset's lengths)")
       ->check(CLI::Range(0.0, 0.9));

@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "engine/bench/record.hpp"
+#include "engine/body/quadruped.hpp"
 #include "engine/bench/scratch_folder.hpp"
 #include "engine/core/log.hpp"
 #include "engine/pipeline/body_stage.hpp"
@@ -27,7 +28,7 @@ json run_body_suite(gpu::Context& ctx, const Options& options) {
   // length within +-40 % of the preset the knowledge stage is given.
   const std::vector<std::string> animals = options.quick ? std::vector<std::string>{"cat"}
                                                          : std::vector<std::string>{"cat", "dog", "fox", "panda", "tiger", "lion"};
-  const float proportion_spread = options.quick ? 0.06f : 0.25f, fur_length_spread = options.quick ? 0.0f : 0.4f;
+  const float proportion_spread = options.quick ? body::kDefaultProportionSpread : 0.25f, fur_length_spread = options.quick ? 0.0f : 0.4f;
   const std::vector<unsigned> seeds = options.quick ? std::vector<unsigned>{1} : std::vector<unsigned>{1, 2};
   const std::uint32_t neus_steps = options.quick ? 120 : 400;
   json records = json::array();

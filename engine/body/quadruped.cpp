@@ -345,7 +345,7 @@ QuadrupedProportions vary_proportions(const QuadrupedProportions& p, unsigned se
     *f *= u(rng);
   // The pitches swing +-20 and +-40 degrees at the default spread, less below it and up to half
   // as much again above it (a wider family, not a broken one).
-  const float swing = std::min(1.5f, amount / 0.06f);  // exactly 1 at the default
+  const float swing = std::min(1.5f, amount / kDefaultProportionSpread);  // exactly 1 at the default
   const float neck = u(rng), tail = u(rng);
   if (amount > 0) {
     out.neck_pitch_deg += 20.0f * (neck - 1.0f) / amount * swing;
@@ -354,11 +354,13 @@ QuadrupedProportions vary_proportions(const QuadrupedProportions& p, unsigned se
   // The head's parts keep to the head: drawn apart they could make a neck wider than the head that
   // swallows the eyes. Their ratios to the head stay within 13 % of the family's, which the default
   // amount never reaches (1.06 / 0.94), so only a wider spread is held by it; there the neck is
-  // also no wider against the head than the family's (a panda's neck is already as wide as its head).
+  // also no wider against the head than the family's (a panda's neck is already as wide as its
+  // head). So the neck's bound steps from 1.13 to 1 just above the default: default scenes stay
+  // exactly what they were, and a wider family never thickens the neck against the head.
   const float head = out.head_radius / p.head_radius;
   for (auto member : {&QuadrupedProportions::neck_radius, &QuadrupedProportions::muzzle_length, &QuadrupedProportions::muzzle_radius,
                       &QuadrupedProportions::ear_length, &QuadrupedProportions::ear_width, &QuadrupedProportions::eye_radius}) {
-    const float highest = member == &QuadrupedProportions::neck_radius && amount > 0.06f ? 1.0f : 1.13f;
+    const float highest = member == &QuadrupedProportions::neck_radius && amount > kDefaultProportionSpread ? 1.0f : 1.13f;
     if (const float ratio = out.*member / p.*member / head; ratio < 1.0f / 1.13f || ratio > highest)
       out.*member = p.*member * head * std::clamp(ratio, 1.0f / 1.13f, highest);
   }

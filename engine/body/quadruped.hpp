@@ -38,9 +38,13 @@ struct QuadrupedProportions {
 const std::vector<std::string>& known_animals();
 // Throws UsageError listing the known animals.
 QuadrupedProportions animal_proportions(const std::string& animal);
-// Every proportion scaled by an independent factor in [1 - amount, 1 + amount] (seeded); the neck's
-// and tail's pitch swing +-20 and +-40 degrees at the default amount (see the definition).
-QuadrupedProportions vary_proportions(const QuadrupedProportions& p, unsigned seed, float amount = 0.06f);
+// How far `nf_gpu synth`'s animals stray from their family unless asked for more.
+constexpr float kDefaultProportionSpread = 0.06f;
+// Every proportion scaled by a seeded factor in [1 - amount, 1 + amount], each drawn on its own up to
+// the default amount; beyond it the head's parts keep within 13 % of the head's factor and the neck
+// no wider against the head than the family's. The neck's and tail's pitch swing +-20 and +-40
+// degrees at the default amount, up to half as much again beyond it (see the definition).
+QuadrupedProportions vary_proportions(const QuadrupedProportions& p, unsigned seed, float amount = kDefaultProportionSpread);
 
 struct QuadrupedBuildOptions {
   float voxel = 0.0f;  // marching-cubes voxel in metres; 0: torso_length / 110

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <string>
 
 #include <opencv2/imgproc.hpp>
@@ -214,7 +215,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
       if (animal_voxels[k]) voxels.push_back(grid.centre(k));
     // Discs a little wider than a voxel, raised: the cuts grow back inside a hull that is not short of the animal.
     parallel_for(views, [&](std::size_t i0, std::size_t i1) {
-      for (std::size_t i = i0; i < i1; ++i) hull_masks[i] = draw_voxels(scene.cameras[i], voxels, grid.side, 0.8, true);
+      for (std::size_t i = i0; i < i1; ++i) hull_masks[i] = draw_voxels(scene.cameras[i], voxels, grid.side, 0.8, DiscRadius::rounded_up);
     });
     return voxels.size();
   };

@@ -92,7 +92,7 @@ SilhouetteCheck check_silhouettes(const std::vector<io::Camera>& cameras, const 
     for (std::size_t i = i0; i < i1; ++i) {
       // Discs as wide as a voxel, rounded, not raised: a pixel more all round fattens thin legs
       // against the mask compared.
-      const cv::Mat hull = draw_voxels(cameras[i], surface, grid.side, 0.7, false);
+      const cv::Mat hull = draw_voxels(cameras[i], surface, grid.side, 0.7, DiscRadius::rounded);
       const Slide slide = best_slide(inside[i], hull, o.max_shift);
       out.views[i].iou = slide.iou, out.views[i].shifted_iou = slide.best_iou, out.views[i].shift_px = slide.shift_px;
     }

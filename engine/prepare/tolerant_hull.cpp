@@ -46,12 +46,12 @@ std::vector<char> HullGrid::carve(const std::vector<io::Camera>& cameras, const 
   return kept;
 }
 
-cv::Mat draw_voxels(const io::Camera& c, const std::vector<glm::dvec3>& centres, double side, double radius_share, bool round_up) {
+cv::Mat draw_voxels(const io::Camera& c, const std::vector<glm::dvec3>& centres, double side, double radius_share, DiscRadius rounding) {
   cv::Mat out = cv::Mat::zeros(int(c.height), int(c.width), CV_8U);
   for (const glm::dvec3& p : centres)
     if (const glm::dvec3 q = c.project(p); q.z > 0) {
       const double r = radius_share * side * c.fx / q.z;
-      const int radius = std::max(1, int(round_up ? std::ceil(r) : std::lround(r)));
+      const int radius = std::max(1, rounding == DiscRadius::rounded_up ? int(std::ceil(r)) : int(std::lround(r)));
       cv::circle(out, cv::Point(int(q.x), int(q.y)), radius, cv::Scalar(255), cv::FILLED);
     }
   return out;

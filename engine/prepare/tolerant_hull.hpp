@@ -28,15 +28,16 @@ struct HullGrid {
   glm::uvec3 cells{1};
   std::size_t total() const { return std::size_t(cells.x) * cells.y * cells.z; }
   std::size_t index(std::size_t x, std::size_t y, std::size_t z) const { return (z * cells.y + y) * cells.x + x; }
-  glm::dvec3 centre(std::size_t k) const;           // world
+  glm::dvec3 centre(std::size_t k) const;                             // world
   std::optional<std::size_t> cell_of(const glm::dvec3& world) const;  // none outside the box
   // Per voxel, whether its centre lies in the tolerant hull of `masks`.
   std::vector<char> carve(const std::vector<io::Camera>& cameras, const std::vector<cv::Mat>& masks, const std::vector<char>* left_out = nullptr) const;
 };
 
 // Voxel centres drawn into a camera's frame as filled discs of `radius_share` x the voxel's edge
-// (at least a pixel), rounded up or to the nearest pixel: CV_8U, 255 inside.
-cv::Mat draw_voxels(const io::Camera& camera, const std::vector<glm::dvec3>& centres, double side, double radius_share, bool round_up);
+// (at least a pixel), their radius rounded up or to the nearest pixel: CV_8U, 255 inside.
+enum class DiscRadius { rounded_up, rounded };
+cv::Mat draw_voxels(const io::Camera& camera, const std::vector<glm::dvec3>& centres, double side, double radius_share, DiscRadius rounding);
 
 // The IoU of two CV_8U masks (non-zero inside); 0 when both are empty.
 double mask_iou(const cv::Mat& a, const cv::Mat& b);

@@ -69,8 +69,8 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
   if (o.strands == 0) throw UsageError("synth: --strands must be >= 1");
   if (!(o.hair_width > 0 && o.hair_width <= 100)) throw UsageError("synth: --hair-width must lie in (0, 100], got " + std::to_string(o.hair_width));
   if (!(o.photo_noise >= 0 && o.photo_noise <= 255)) throw UsageError("synth: --noise must lie in [0, 255], got " + std::to_string(o.photo_noise));
-  if (!(o.proportion_spread >= 0 && o.proportion_spread <= 0.5f))
-    throw UsageError("synth: --proportion-spread must lie in [0, 0.5], got " + std::to_string(o.proportion_spread));
+  if (!(o.proportion_spread >= 0 && o.proportion_spread <= 0.3f))
+    throw UsageError("synth: --proportion-spread must lie in [0, 0.3], got " + std::to_string(o.proportion_spread));
   if (!(o.fur_length_spread >= 0 && o.fur_length_spread <= 0.9f))
     throw UsageError("synth: --fur-length-spread must lie in [0, 0.9], got " + std::to_string(o.fur_length_spread));
   hair_shading_from(o.shading);  // an unknown shading fails before any work
@@ -106,7 +106,9 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
   timings["body_s"] = clock.lap();
   log::write(log::Level::Info, "synth: " + o.animal + " body, " + std::to_string(bald.vertex_count()) + " vertices");
 
-  // Fur from the animal's knowledge preset; the ground-truth knowledge carries the true eye distance.
+  // Fur from the animal's knowledge preset, each region's length scaled by --fur-length-spread; the
+  // ground-truth knowledge carries the true eye distance. (The thickness scaled with it stays only
+  // where the grown fur gives none, below.)
   knowledge::Knowledge know = knowledge::preset(o.animal);
   know.eye_distance_cm = eyes.distance() * kCmPerUnit;
   if (o.fur_length_spread > 0) {
@@ -257,10 +259,11 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
       {"animal_to_world", json_matrix_rows(glm::mat4(frame.matrix() * glm::dmat4(params.animal_to_world)))},
       {"region_names", region_names},
       {"strands", {{"count", fur.strands.strand_count()}, {"points_per_strand", o.points_per_strand},
+                   {"length_spread", std::round(1e6 * o.fur_length_spread) / 1e6},
                    {"render_radius", look.radius * frame.scale}}},
       {"body", {{"model", model.name}, {"vertices", bald.vertex_count()}, {"triangles", bald.triangle_count()},
                 {"shape", shape}, {"joint_rotations", rotations}, {"torso_length", proportions.torso_length},
-                {"proportion_spread", o.proportion_spread}, {"fur_length_spread", o.fur_length_spread}}},
+                {"proportion_spread", std::round(1e6 * o.proportion_spread) / 1e6}}},
       {"outer", {{"method", "morphological closing of body + strands, then marching cubes"},
                  {"voxel", envelope.voxel * frame.scale}, {"closing_radius", envelope.closing_radius * frame.scale},
                  {"vertices", envelope.mesh.vertex_count()}}},

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <string>
 
+#include "engine/body/quadruped.hpp"
 #include "engine/core/json.hpp"
 
 namespace nf::synth {
@@ -27,7 +28,7 @@ struct SynthOptions {
   // wider than the presets: every body proportion scaled by a seeded factor in [1 - s, 1 + s]
   // (and the neck's and tail's pitch, body::vary_proportions), and each region's fur length by one in
   // [1 - f, 1 + f]. gt/knowledge.json holds the lengths grown.
-  float proportion_spread = 0.06f;
+  float proportion_spread = body::kDefaultProportionSpread;
   float fur_length_spread = 0;
   // The world frame the files are written in (world_frame.hpp): "y-up-m" (y up, metres) or
   // "z-up-mm" (z up, millimetres, the animal metres from the origin). The animal, the photos and

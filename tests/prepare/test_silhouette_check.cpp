@@ -3,6 +3,7 @@
 #include <doctest/doctest.h>
 
 #include <filesystem>
+#include <optional>
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "engine/core/error.hpp"
@@ -11,6 +12,7 @@
 #include "engine/io/mesh.hpp"
 #include "engine/io/scene.hpp"
 #include "engine/prepare/silhouette_check.hpp"
+#include "engine/prepare/tolerant_hull.hpp"
 #include "engine/synth/synth_scene.hpp"
 
 namespace fs = std::filesystem;
@@ -49,6 +51,21 @@ const Scene& scene() {
 }
 
 }  // namespace
+
+TEST_CASE("the hull's grid: cubic cells over the animal's box, each centre in its own cell, nothing outside") {
+  prepare::AnimalBox box;
+  box.base = {1, 2, 3};
+  box.u = {0, 0, 1}, box.v = {1, 0, 0}, box.n = {0, 1, 0};  // turned: the box's frame is not the world's
+  box.lo = {-0.5, -0.25, 0.0}, box.hi = {0.5, 0.25, 0.4};
+  const prepare::HullGrid grid(box, 20);
+  CHECK(grid.side == doctest::Approx(0.05));
+  CHECK(grid.cells == glm::uvec3(20, 10, 8));
+  CHECK(grid.total() == 1600);
+  for (std::size_t k = 0; k < grid.total(); k += 37) CHECK(grid.cell_of(grid.centre(k)) == std::optional<std::size_t>(k));
+  CHECK(grid.centre(0) == box.world(box.lo + glm::dvec3(0.025)));
+  CHECK_FALSE(grid.cell_of(box.world({0.0, 0.0, -0.01})));  // below the floor
+  CHECK_FALSE(grid.cell_of(box.world({0.51, 0.0, 0.2})));
+}
 
 TEST_CASE("silhouette check: the true cameras and masks agree, every view") {
   const Scene& s = scene();

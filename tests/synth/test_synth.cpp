@@ -403,10 +403,27 @@ TEST_CASE("a coat drawn wider than the preset: each region's fur length within t
   o.animal = "cat", o.views = 1, o.resolution = 64, o.seed = 2, o.strands = 3000, o.samples_per_axis = 1, o.body_voxel = 0.01f;
   o.fur_length_spread = 0.4f, o.proportion_spread = 0.2f;
   const json spread = synth::synthesize_scene(root / "spread", o);
-  CHECK(spread["body"]["fur_length_spread"].get<double>() == doctest::Approx(0.4));
-  CHECK(spread["body"]["proportion_spread"].get<double>() == doctest::Approx(0.2));
+  CHECK(spread["strands"]["length_spread"].get<double>() == 0.4);
+  CHECK(spread["body"]["proportion_spread"].get<double>() == 0.2);
+  // The strands grew at the lengths the truth states: per region, their mean length against the
+  // preset's follows the truth's factor (the coat's own jitter, curl and clumping averaging out).
   const knowledge::Knowledge preset = knowledge::preset("cat"), grown = knowledge::read_knowledge(root / "spread" / "gt" / "knowledge.json");
+  const io::StrandSet strands = io::read_hair(root / "spread" / "gt" / "strands.hair");
+  const geometry::Mesh bald = io::read_mesh(root / "spread" / "gt" / "bald.ply");  // a region per vertex: the root's
+  const geometry::PointIndex bald_index(bald.positions);
+  std::vector<double> length_sum(preset.regions.size(), 0.0);
+  std::vector<std::size_t> count(preset.regions.size(), 0);
+  for (std::uint32_t i = 0; i < strands.strand_count(); ++i) {
+    const float* p = strands.points.data() + 3 * std::size_t(strands.offsets[i]);
+    const std::size_t region = std::size_t(bald.regions[bald_index.nearest(p).first]);
+    double length = 0;
+    for (std::uint32_t k = 1; k < strands.points_in(i); ++k)
+      length += glm::length(glm::vec3(p[3 * k], p[3 * k + 1], p[3 * k + 2]) - glm::vec3(p[3 * k - 3], p[3 * k - 2], p[3 * k - 1]));
+    length_sum[region] += length * 100.0;  // cm: synth writes metres
+    ++count[region];
+  }
   double widest = 0;
+  std::size_t compared = 0, refuted = 0;
   for (std::size_t r = 0; r < preset.regions.size(); ++r) {
     if (!preset.regions[r] || preset.regions[r]->length_cm <= 0) continue;
     REQUIRE(grown.regions[r]);
@@ -414,8 +431,20 @@ TEST_CASE("a coat drawn wider than the preset: each region's fur length within t
     CHECK(f >= 0.6 - 1e-4);
     CHECK(f <= 1.4 + 1e-4);
     widest = std::max(widest, std::abs(f - 1));
+    if (count[r] < 100) continue;
+    INFO("region ", body::region_name(std::int32_t(r)));
+    const double mean = length_sum[r] / double(count[r]);
+    CHECK(mean == doctest::Approx(grown.regions[r]->length_cm).epsilon(0.15));
+    // Where the spread moved a region by more than the tolerance, the preset's length is refuted.
+    if (std::abs(f - 1) > 0.25) {
+      CHECK(std::abs(mean / preset.regions[r]->length_cm - 1) > 0.15);
+      ++refuted;
+    }
+    ++compared;
   }
   CHECK(widest > 0.1);
+  CHECK(compared >= 3);
+  CHECK(refuted >= 1);
   o.fur_length_spread = 0.95f;
   CHECK_THROWS_WITH_AS(synth::synthesize_scene(root / "bad", o), doctest::Contains("--fur-length-spread"), UsageError);
   o.fur_length_spread = 0, o.proportion_spread = 0.6f;
