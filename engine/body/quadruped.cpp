@@ -325,8 +325,10 @@ QuadrupedProportions animal_proportions(const std::string& animal) {
     p.ear_length = 0.08f, p.ear_width = 0.09f, p.ear_thickness = 0.015f, p.ear_tip_ratio = 0.6f;
     p.eye_radius = 0.024f, p.tail_length = 0.90f, p.tail_radius_base = 0.05f, p.tail_radius_tip = 0.03f;
     p.tail_pitch_deg = -45, p.tail_curl_deg = 45;
-    p.mane = animal == "lion";
-    if (p.mane) p.head_radius = 0.18f, p.tail_radius_tip = 0.035f;
+    // Both grow a mane in their knowledge (a lion's mane, a tiger's ruff), so their bodies carry its
+    // region: the truth then says where the knowledge's mane length grew.
+    p.mane = true;
+    if (animal == "lion") p.head_radius = 0.18f, p.tail_radius_tip = 0.035f;
     return p;
   }
   std::string names;
