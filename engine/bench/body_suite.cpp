@@ -5,8 +5,8 @@
 #include <fstream>
 
 #include "engine/bench/record.hpp"
-#include "engine/body/quadruped.hpp"
 #include "engine/bench/scratch_folder.hpp"
+#include "engine/body/quadruped.hpp"
 #include "engine/core/log.hpp"
 #include "engine/pipeline/body_stage.hpp"
 #include "engine/pipeline/knowledge_stage.hpp"
