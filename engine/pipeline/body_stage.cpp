@@ -24,7 +24,7 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 4;  // 2: fit.json; 3: the head-and-body length; 4: the eyes from the photos
+constexpr int kStageVersion = 5;  // 2: fit.json; 3: the head-and-body length; 4: the eyes from the photos; 5: the tail's pitch tried
 
 // The cameras' mean up vector when they agree on one (a capture rig's usual case).
 body::FrameHints frame_hints(const io::Scene& scene) {
