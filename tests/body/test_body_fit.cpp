@@ -1,7 +1,7 @@
 // The body fit (engine/body/body_fit.hpp): the posing adjoint against finite differences, labels
 // that do not depend on the scene's world frame (rotations about every axis, z-up, x0.01 and x100,
-// far away), a hanging tail swung down, the knowledge's mane labelled on a fitted lion, and bad input (no faces, NaN, several
-// blobs, a sphere).
+// far away), a hanging tail swung down, the knowledge's mane labelled on a fitted lion, and bad
+// input (no faces, NaN, several blobs, a sphere).
 #include <doctest/doctest.h>
 
 #include <cmath>
