@@ -155,9 +155,9 @@ class Fitter {
     const int tail = tail_root(model);
     for (std::size_t k = 0; k < model.joint_count(); ++k) {
       const std::string& name = model.joint_names[k];
-      const bool free = name.find("ear") != std::string::npos || name.find("Ear") != std::string::npos || int(k) == tail;
-      free_.push_back(free);
-      limits_.push_back(free ? std::max(o.max_joint_angle, 2.8) : o.max_joint_angle);
+      const bool turns_freely = name.find("ear") != std::string::npos || name.find("Ear") != std::string::npos || int(k) == tail;
+      free_.push_back(turns_freely);
+      limits_.push_back(turns_freely ? std::max(o.max_joint_angle, 2.8) : o.max_joint_angle);
     }
   }
 
