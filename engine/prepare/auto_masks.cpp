@@ -14,6 +14,7 @@
 #include "engine/core/stats.hpp"
 #include "engine/io/image.hpp"
 #include "engine/prepare/floor_consistency.hpp"
+#include "engine/prepare/keypoint_cover.hpp"
 #include "engine/prepare/silhouette_check.hpp"
 #include "engine/prepare/tolerant_hull.hpp"
 
@@ -295,6 +296,24 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   }
   report["recut_from_hull"] = recut;
   report["replaced_by_hull"] = replaced;
+  std::vector<std::vector<std::uint8_t>> masks(views);
+  for (std::size_t i = 0; i < views; ++i) {
+    const io::Camera& c = scene.cameras[i];
+    masks[i].resize(std::size_t(c.width) * c.height);
+    for (std::uint32_t y = 0; y < c.height; ++y)
+      for (std::uint32_t x = 0; x < c.width; ++x) masks[i][std::size_t(y) * c.width + x] = cut[i].at<std::uint8_t>(int(y), int(x)) ? 1 : 0;
+  }
+  // The photo's own keypoints on the animal against its mask (keypoint_cover.hpp): a view whose
+  // mask leaves most of them out has a pose that puts the animal elsewhere, and is left out.
+  const std::vector<KeypointCover> covers = animal_keypoint_cover(scene.cameras, points, animal, background, masks);
+  const std::size_t misplaced_before = out.misplaced.size();
+  for (std::size_t i = 0; i < views; ++i)
+    if (!left_out[i] && covers[i].refutes()) {
+      left_out[i] = 1;
+      out.misplaced.push_back({i, covers[i].reason()});
+    }
+  if (out.misplaced.size() > misplaced_before)
+    std::sort(out.misplaced.begin(), out.misplaced.end(), [](const StrayCamera& a, const StrayCamera& b) { return a.index < b.index; });
   if (!recut.empty() || !replaced.empty())
     log::warn("prepare: ", recut.size() + replaced.size(), " automatic mask(s) lost the animal or caught something else, and were made again from the other views' hull: ",
               recut.empty() ? replaced.front() : recut.front(), recut.size() + replaced.size() > 1 ? ", ..." : "");
@@ -306,13 +325,13 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   for (std::size_t i = 0; i < views; ++i) {
     const io::Camera& c = scene.cameras[i];
     per_view.push_back({{"view", c.name}, {"animal_share", double(cv::countNonZero(cut[i])) / double(cut[i].total())}, {"hull_iou", agreement[i]},
-                        {"floor_pixels", floor_pixels[i]}, {"off_floor_pixels", off_floor_pixels[i]}});
+                        {"floor_pixels", floor_pixels[i]}, {"off_floor_pixels", off_floor_pixels[i]},
+                        {"animal_keypoints", covers[i].seen}, {"animal_keypoints_inside", covers[i].inside},
+                        {"background_keypoints_inside", covers[i].background_inside}, {"background_keypoints_expected", covers[i].background_expected},
+                        {"left_out", left_out[i] != 0}});
     if (!left_out[i] && agreement[i] < median_agreement - 0.08) flagged.push_back(c.name);  // well below the views' median
-    std::vector<std::uint8_t> mask(std::size_t(c.width) * c.height);
-    for (std::uint32_t y = 0; y < c.height; ++y)
-      for (std::uint32_t x = 0; x < c.width; ++x) mask[std::size_t(y) * c.width + x] = cut[i].at<std::uint8_t>(int(y), int(x)) ? 1 : 0;
-    out.masks.push_back(std::move(mask));
   }
+  out.masks = std::move(masks);
   report["views"] = per_view;
   report["disagreeing_views"] = flagged;
   if (!flagged.empty()) log::warn("prepare: ", flagged.size(), " automatic mask(s) disagree with the other views' hull (IoU with it 0.08 below the views' median): ", flagged.front(), flagged.size() > 1 ? ", ..." : "", "; check them in previews/");

@@ -6,8 +6,9 @@
 // background points and by what the other photos say of its floor (floor_consistency.hpp: the legs
 // and the body seen against the floor stand out, the floor and shadows on it agree); then the masks
 // are made to agree across views: a visual hull is carved from them, projected back, and each photo
-// is cut again inside it. A view whose first cut fits the others' silhouette only once moved has a
-// wrong pose and takes no part.
+// is cut again inside it. A view whose first cut fits the others' silhouette only once moved, or
+// whose final mask leaves out most of its own keypoints on the animal (keypoint_cover.hpp), has a
+// wrong pose and is left out.
 #include <cstdint>
 #include <vector>
 
@@ -27,8 +28,9 @@ struct AutoMaskOptions {
 struct AutoMasks {
   std::vector<std::vector<std::uint8_t>> masks;  // per camera of the scene, width x height, 1 = animal
   json report;  // the centre, floor and animal points found, and per view its share of animal and its agreement with the hull
-  // Views whose first cut meets the others' silhouette only when moved (silhouette_check.hpp): their
-  // pose is wrong. They carve nothing, and the caller leaves them out of the scene.
+  // Views whose first cut meets the others' silhouette only when moved (silhouette_check.hpp), or
+  // whose mask misses their own keypoints on the animal: their pose is wrong. In ascending order;
+  // the caller leaves them out of the scene.
   std::vector<StrayCamera> misplaced;
 };
 
