@@ -79,8 +79,9 @@ TEST_CASE("keypoint cover: a mask drawn where a wrong pose puts the animal refut
   CHECK(k.cover(std::vector<std::uint8_t>(std::size_t(kWidth) * kHeight, 0)).refutes());
 }
 
-TEST_CASE("keypoint cover: too few keypoints, or a mask of another size, conclude nothing") {
-  CHECK_FALSE(Keypoints(3, false).cover(ellipse_mask(90)).refutes());
+TEST_CASE("keypoint cover: too few keypoints (under 8 on the animal, no background), or a mask of another size, conclude nothing") {
+  CHECK_FALSE(Keypoints(7, false).cover(ellipse_mask(90)).refutes());
+  CHECK(Keypoints(8, false).cover(ellipse_mask(90)).refutes());
   const prepare::KeypointCover wrong_size = Keypoints(20, true).cover(std::vector<std::uint8_t>(10, 1));
   CHECK(wrong_size.seen == 0);
   CHECK_FALSE(wrong_size.refutes());

@@ -208,9 +208,13 @@ TEST_CASE("prepare makes the masks itself when the photos have none, close to th
   // outlines are a larger share of its masks, and its 24-33 animal points vary with COLMAP's run
   // (320 px: median 0.917-0.935 measured; worst 0.89-0.91, once 0.69 in view 025, which looks
   // down on the dog against the floor, where the hull that corrects the cuts is fattest).
+  // The model the first case made and checked is reused (--colmap): a COLMAP run less (about a
+  // minute), and the masks are judged on poses known to be right.
   const Fixture& f = fixture();
   const double min_median = f.full ? 0.95 : 0.88, min_worst = f.full ? 0.90 : 0.65;
-  const prepare::PrepareOptions o = f.options("automatic");
+  prepare::PrepareOptions o = f.options("automatic");
+  o.colmap_model = f.root / "prepared" / "colmap" / "sparse" / "0";
+  REQUIRE(fs::exists(o.colmap_model / "images.bin"));
   const json report = prepare::prepare_scene(o);
   CHECK(report["masks"] == "automatic");
   CHECK(report["automatic_masks"]["floor_found"] == true);
@@ -234,10 +238,10 @@ TEST_CASE("prepare makes the masks itself when the photos have none, close to th
     if (v["left_out"].get<bool>()) continue;
     const double seen = v["animal_keypoints"].get<double>();
     if (seen >= 5) least_cover = std::min(least_cover, v["animal_keypoints_inside"].get<double>() / seen);
-    unjudged += seen < 5;
+    unjudged += seen < 8;
     most_background = std::max(most_background, v["background_keypoints_inside"].get<double>() / std::max(1.0, v["background_keypoints_expected"].get<double>()));
   }
-  MESSAGE("the masks hold at least ", least_cover, " of their views' keypoints on the animal; ", unjudged, " view(s) saw fewer than 5; at most ", most_background,
+  MESSAGE("the masks hold at least ", least_cover, " of their views' keypoints on the animal; ", unjudged, " view(s) saw fewer than 8 (too few to judge); at most ", most_background,
           " of a patch of background's keypoints");
   for (const json& v : report["automatic_masks"]["views"])
     if (v["view"] == a.worst_iou_camera) MESSAGE("its automatic mask: ", v.dump(), "; recut ", report["automatic_masks"]["recut_from_hull"].dump(), ", replaced ", report["automatic_masks"]["replaced_by_hull"].dump());
@@ -245,7 +249,7 @@ TEST_CASE("prepare makes the masks itself when the photos have none, close to th
   CHECK(a.worst_iou >= min_worst);
   // A right mask's interior holds no background keypoint but a mislabelled one (0 measured, where a
   // patch of background its size holds about 34); the animal's keypoints are too few a view (under
-  // 5 in most) to bound more tightly than the check itself does (0.8-1 measured).
+  // 8 in most) to bound more tightly than the check itself does (0.6-1 measured).
   CHECK(most_background <= 0.25);
   CHECK(fs::exists(o.out / "previews" / "000.jpg"));
 }
