@@ -10,8 +10,10 @@
 
 namespace nf::io {
 
-glm::dvec3 Camera::project(const glm::dvec3& world) const {
-  const glm::dvec4 c = glm::inverse(camera_to_world) * glm::dvec4(world, 1.0);
+glm::dvec3 Camera::project(const glm::dvec3& world) const { return project(world, world_to_camera()); }
+
+glm::dvec3 Camera::project(const glm::dvec3& world, const glm::dmat4& to_camera) const {
+  const glm::dvec4 c = to_camera * glm::dvec4(world, 1.0);
   const double depth = -c.z;  // OpenGL: the camera looks down -z
   return {cx + fx * c.x / depth, cy - fy * c.y / depth, depth};
 }

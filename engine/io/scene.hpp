@@ -24,6 +24,10 @@ struct Camera {
   // Pixel coordinates (x right, y down, origin at the top-left corner) of a world point, and its
   // depth along the viewing direction (positive in front of the camera).
   glm::dvec3 project(const glm::dvec3& world) const;
+  // The same through a given world_to_camera(): project() inverts the pose on every call, so a loop
+  // that projects many points through one camera inverts it once (the same result, bit for bit).
+  glm::dvec3 project(const glm::dvec3& world, const glm::dmat4& world_to_camera) const;
+  glm::dmat4 world_to_camera() const { return glm::inverse(camera_to_world); }
   // Its inverse: the world point at `depth` along the viewing direction behind pixel coordinates.
   glm::dvec3 unproject(const glm::dvec2& pixel, double depth) const;
   // The camera's centre (world).

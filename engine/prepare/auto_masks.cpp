@@ -38,8 +38,9 @@ cv::Mat photo_bgr(const io::Camera& camera) {
 
 std::vector<cv::Point> projected(const io::Camera& camera, const std::vector<glm::dvec3>& world) {
   std::vector<cv::Point> r;
+  const glm::dmat4 to_camera = camera.world_to_camera();
   for (const glm::dvec3& p : world)
-    if (const glm::dvec3 q = camera.project(p); q.z > 0) r.emplace_back(int(std::lround(q.x)), int(std::lround(q.y)));
+    if (const glm::dvec3 q = camera.project(p, to_camera); q.z > 0) r.emplace_back(int(std::lround(q.x)), int(std::lround(q.y)));
   return r;
 }
 

@@ -56,6 +56,8 @@ cv::Mat floor_evidence(const std::vector<io::Camera>& cameras, const std::vector
     if (j != view) by_angle.emplace_back(-glm::dot(look, glm::normalize(centre - cameras[j].centre())), j);
   std::sort(by_angle.begin(), by_angle.end());
   by_angle.resize(std::min(by_angle.size(), kCompared));
+  std::vector<glm::dmat4> to_camera;
+  for (const auto& [unused, j] : by_angle) to_camera.push_back(cameras[j].world_to_camera());
 
   float mine[kPatch], theirs[kPatch];
   for (int y = region.y; y < region.y + region.height; ++y)
@@ -66,9 +68,10 @@ cv::Mat floor_evidence(const std::vector<io::Camera>& cameras, const std::vector
       for (int k = 0, dy = -kHalf; dy <= kHalf; ++dy)
         for (int dx = -kHalf; dx <= kHalf; ++dx) mine[k++] = grey[view].at<float>(y + dy, x + dx);
       int agree = 0, seen = 0, unsure = 0;
-      for (const auto& [unused, j] : by_angle) {
+      for (std::size_t n = 0; n < by_angle.size(); ++n) {
+        const std::size_t j = by_angle[n].second;
         const io::Camera& other = cameras[j];
-        const glm::dvec3 q0 = other.project(*x0), qu = other.project(*xu), qv = other.project(*xv);
+        const glm::dvec3 q0 = other.project(*x0, to_camera[n]), qu = other.project(*xu, to_camera[n]), qv = other.project(*xv, to_camera[n]);
         if (q0.z <= 0) continue;
         // The patch carried through the floor: the local affine map of the plane-induced homography.
         const glm::dvec2 du = glm::dvec2(qu) - glm::dvec2(q0), dv = glm::dvec2(qv) - glm::dvec2(q0);

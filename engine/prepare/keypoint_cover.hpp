@@ -2,8 +2,8 @@
 // Where a photo's keypoints on the animal lie is a fact of the photo, whatever COLMAP's pose for it
 // says. A right pose draws the views' hull over them; a mask that leaves most of them out was drawn
 // where the pose puts the animal, not where the photo shows it (a photo registered on the
-// backdrop's pattern alone, its first cut seeded from the same wrong pose, fits the silhouette check
-// too). Counted with a grace of 1 % of the photo's longer side for the outline.
+// backdrop's pattern alone, whose first cut is seeded from the same wrong pose, can pass the
+// silhouette check). Counted with a grace of 1 % of the photo's longer side for the outline.
 #include <cstdint>
 #include <string>
 #include <vector>

@@ -16,9 +16,10 @@
 
 namespace nf::prepare {
 
-// `masks`: per camera, CV_8U, non-zero inside; `left_out` (when given): views that take no part.
-bool in_tolerant_hull(const std::vector<io::Camera>& cameras, const std::vector<cv::Mat>& masks, const glm::dvec3& p,
-                      const std::vector<char>* left_out = nullptr);
+// `masks`: per camera, CV_8U, non-zero inside; `world_to_camera`: per camera, its world_to_camera();
+// `left_out` (when given): views that take no part.
+bool in_tolerant_hull(const std::vector<io::Camera>& cameras, const std::vector<glm::dmat4>& world_to_camera, const std::vector<cv::Mat>& masks,
+                      const glm::dvec3& p, const std::vector<char>* left_out = nullptr);
 
 // Cubic voxels over the animal's box, `cells` along its longest side (x fastest, then y, then z).
 struct HullGrid {

@@ -74,7 +74,7 @@ void check_same(const Scene& got, const std::vector<Camera>& want) {
 
 }  // namespace
 
-TEST_CASE("a camera's unproject inverts its project, and its rays start at its centre") {
+TEST_CASE("a camera's unproject inverts its project, its rays start at its centre, and a pose inverted once projects alike") {
   Camera c;
   c.width = 640, c.height = 480, c.fx = 500, c.fy = 520, c.cx = 322.5, c.cy = 236.0;
   const double a = 0.7;  // turned about y, moved off the origin
@@ -85,6 +85,7 @@ TEST_CASE("a camera's unproject inverts its project, and its rays start at its c
     const glm::dvec3 q = c.project(p);
     REQUIRE(q.z > 0);
     CHECK(glm::length(c.unproject({q.x, q.y}, q.z) - p) < 1e-9);
+    CHECK(c.project(p, c.world_to_camera()) == q);  // inverted once for many points: the same, bit for bit
   }
   // The principal point at depth 1 lies one unit down the viewing direction (-z of the camera).
   CHECK(glm::length(c.unproject({c.cx, c.cy}, 1.0) - (c.centre() - glm::dvec3(c.camera_to_world[2]))) < 1e-12);

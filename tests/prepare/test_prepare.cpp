@@ -237,11 +237,11 @@ TEST_CASE("prepare makes the masks itself when the photos have none, close to th
   for (const json& v : report["automatic_masks"]["views"]) {
     if (v["left_out"].get<bool>()) continue;
     const double seen = v["animal_keypoints"].get<double>();
-    if (seen >= 5) least_cover = std::min(least_cover, v["animal_keypoints_inside"].get<double>() / seen);
+    if (seen >= 8) least_cover = std::min(least_cover, v["animal_keypoints_inside"].get<double>() / seen);
     unjudged += seen < 8;
     most_background = std::max(most_background, v["background_keypoints_inside"].get<double>() / std::max(1.0, v["background_keypoints_expected"].get<double>()));
   }
-  MESSAGE("the masks hold at least ", least_cover, " of their views' keypoints on the animal; ", unjudged, " view(s) saw fewer than 8 (too few to judge); at most ", most_background,
+  MESSAGE("the masks seeing 8 or more hold at least ", least_cover, " of their keypoints on the animal; ", unjudged, " view(s) saw fewer than 8 (too few to judge); at most ", most_background,
           " of a patch of background's keypoints");
   for (const json& v : report["automatic_masks"]["views"])
     if (v["view"] == a.worst_iou_camera) MESSAGE("its automatic mask: ", v.dump(), "; recut ", report["automatic_masks"]["recut_from_hull"].dump(), ", replaced ", report["automatic_masks"]["replaced_by_hull"].dump());
