@@ -155,7 +155,7 @@ class Fitter {
     const int tail = tail_root(model);
     for (std::size_t k = 0; k < model.joint_count(); ++k) {
       const std::string& name = model.joint_names[k];
-      const bool turns_freely = name.find("ear") != std::string::npos || name.find("Ear") != std::string::npos || int(k) == tail;
+      const bool turns_freely = ear_joint(name) || int(k) == tail;
       free_.push_back(turns_freely);
       limits_.push_back(turns_freely ? std::max(o.max_joint_angle, 2.8) : o.max_joint_angle);
     }
@@ -361,6 +361,15 @@ BodyFit finish(const BodyModel& model, const Target& target, const PoseLayout& L
 
 }  // namespace
 
+bool ear_joint(const std::string& name) {
+  if (name.find("Ear") != std::string::npos) return true;  // a word of a camel-case name: LEar, EarTip
+  std::string n = name;
+  std::transform(n.begin(), n.end(), n.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  for (std::size_t at = n.find("ear"); at != std::string::npos; at = n.find("ear", at + 1))
+    if (at == 0 || !std::isalpha(static_cast<unsigned char>(n[at - 1]))) return true;  // ear_left, l_ear, EAR; not rear, beard
+  return false;
+}
+
 BodyFit fit_body(const BodyModel& model, const geometry::Mesh& world_target, const FrameHints& hints,
                  const BodyFitOptions& o, const std::string& source) {
   model.validate(model.name.empty() ? "body model" : model.name);
@@ -418,8 +427,8 @@ BodyFit fit_body(const BodyModel& model, const geometry::Mesh& world_target, con
   for (std::size_t k = 0; k < model.joint_count(); ++k) {
     const std::string& n = model.joint_names[k];
     const int parent = model.parents[k];
-    const bool ear = (n.find("ear") != std::string::npos || n.find("Ear") != std::string::npos) && n.find("tip") == std::string::npos;
-    const bool parent_ear = parent >= 0 && model.joint_names[std::size_t(parent)].find("ear") != std::string::npos;
+    const bool ear = ear_joint(n) && n.find("tip") == std::string::npos;
+    const bool parent_ear = parent >= 0 && ear_joint(model.joint_names[std::size_t(parent)]);
     if (ear && !parent_ear) ears.push_back({k, model.joint_template[3 * k] >= 0 ? 1.0 : -1.0});
   }
   if (!ears.empty()) {

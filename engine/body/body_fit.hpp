@@ -89,6 +89,10 @@ struct FittedEyes {
 };
 FittedEyes fitted_eyes(const BodyModel& model, const BodyFit& fit);
 
+// Whether the fit treats a joint as an ear's (turning freely, tried drooped): "ear" as a word of
+// its name in any case (ear_left, l_ear, LEar, EAR_R), not inside another word (leg_rear, beard).
+bool ear_joint(const std::string& name);
+
 // The family's mean proportions (the ears' thickness and tip shape are the first animal's, the
 // cat's), the template the body stage fits by default.
 BodyModel default_template();

@@ -17,8 +17,8 @@ std::vector<KeypointCover> animal_keypoint_cover(const std::vector<io::Camera>& 
   std::vector<KeypointCover> covers(cameras.size());
   for (std::size_t i = 0; i < cameras.size(); ++i) {
     const io::Camera& c = cameras[i];
-    const auto seen = points.observed.find(c.image.filename().string());
-    if (seen == points.observed.end() || masks[i].size() != std::size_t(c.width) * c.height) continue;
+    const auto observed = points.observed.find(c.image.filename().string());
+    if (observed == points.observed.end() || masks[i].size() != std::size_t(c.width) * c.height) continue;
     const int w = int(c.width), h = int(c.height), grace = std::max(2, int(std::lround(0.01 * std::max(w, h))));
     // Within `grace` of the mask (held) and with all of that disc in the mask (deep).
     const auto count_disc = [&](int x, int y) {
@@ -33,7 +33,7 @@ std::vector<KeypointCover> animal_keypoint_cover(const std::vector<io::Camera>& 
       return std::pair{in, all};
     };
     std::size_t background_seen = 0;
-    for (const Observation& ob : seen->second) {
+    for (const Observation& ob : observed->second) {
       const int x = int(std::floor(ob.pixel.x)), y = int(std::floor(ob.pixel.y));
       if (x < 0 || y < 0 || x >= w || y >= h) continue;
       if (animal[ob.point]) {

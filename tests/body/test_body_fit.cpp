@@ -1,6 +1,6 @@
 // The body fit (engine/body/body_fit.hpp): the posing adjoint against finite differences, labels
 // that do not depend on the scene's world frame (rotations about every axis, z-up, x0.01 and x100,
-// far away), a hanging tail swung down, the knowledge's mane labelled on a fitted lion, and bad
+// far away), which joints are ears, a hanging tail swung down, the knowledge's mane labelled on a fitted lion, and bad
 // input (no faces, NaN, several blobs, a sphere).
 #include <doctest/doctest.h>
 
@@ -217,6 +217,14 @@ TEST_CASE("the fit finds the same labels in every world frame: rotated about eac
     for (std::size_t i = 0; i < labels[0].size(); ++i) same += labels[k][i] == labels[0][i];
     CHECK(double(same) / double(labels[0].size()) > 0.85);
   }
+}
+
+TEST_CASE("the joints the fit treats as ears: the family's, SMAL's and other spellings, not a word that holds 'ear'") {
+  for (const char* ear : {"ear_left", "ear_right_tip", "LEar", "REar", "l_ear", "EAR_R", "Ear.L"}) CHECK_MESSAGE(ear_joint(ear), ear);
+  for (const char* other : {"leg_rear", "hip_rear_l", "LegBack_Rear", "REAR", "beard", "head", "tail_0", "spine"}) CHECK_MESSAGE(!ear_joint(other), other);
+  // Every ear joint of the family's template and only those.
+  const BodyModel model = default_template();
+  for (const std::string& name : model.joint_names) CHECK_MESSAGE(ear_joint(name) == (name.rfind("ear_", 0) == 0), name);
 }
 
 TEST_CASE("a tail hanging down behind the hind legs, fused with them in the fur's envelope, is swung down and labelled tail") {
