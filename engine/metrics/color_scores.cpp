@@ -1,6 +1,7 @@
 #include "engine/metrics/color_scores.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "engine/core/color.hpp"
 #include "engine/core/error.hpp"
@@ -75,17 +76,22 @@ json color_scores(const GroomColors& g, const ColorTruth& truth, std::uint32_t m
   for (const Pair& p : pairs)
     if (p.seen) num += double(color::luminance(p.estimate)) * color::luminance(p.truth), den += double(color::luminance(p.estimate)) * color::luminance(p.estimate);
   const double gain = den > 0 ? num / den : 1.0;
-  std::vector<double> seen, unseen, seen_local;
+  std::vector<double> seen, unseen, seen_local, seen_lightness, seen_chroma;
   std::vector<double> by_control(g.controls, 0.0), count(g.controls, 0.0);
   for (const Pair& p : pairs) {
     const double e = color::delta_e(p.estimate * float(gain), p.truth);
     (p.seen ? seen : unseen).push_back(e);
-    if (p.seen) by_control[p.control] += e, count[p.control] += 1, seen_local.push_back(color::delta_e(p.estimate * float(gain), p.local));
+    if (!p.seen) continue;
+    by_control[p.control] += e, count[p.control] += 1, seen_local.push_back(color::delta_e(p.estimate * float(gain), p.local));
+    // What the error is made of: lightness (shading, the light's colour left out) or hue and saturation.
+    const glm::vec3 d = color::lab_of_linear(p.estimate * float(gain)) - color::lab_of_linear(p.truth);
+    seen_lightness.push_back(std::abs(d.x)), seen_chroma.push_back(std::hypot(d.y, d.z));
   }
   json along = json::array();  // seen strands' mean at t = 1/C .. 1: how far the colour along a strand is off
   for (std::uint32_t c = 0; c < g.controls; ++c) along.push_back(count[c] > 0 ? by_control[c] / count[c] : 0.0);
   return {{"delta_e_seen", summary(seen)}, {"delta_e_unseen", summary(unseen)}, {"delta_e_seen_along", along},
-          {"delta_e_seen_local", summary(seen_local)}, {"exposure_gain", gain},
+          {"delta_e_seen_local", summary(seen_local)}, {"delta_l_seen", summary(seen_lightness)},
+          {"delta_ab_seen", summary(seen_chroma)}, {"exposure_gain", gain},
           {"strands_scored", (n + every - 1) / every}};
 }
 

@@ -38,7 +38,7 @@ struct ColorTruth {
 ColorTruth color_truth(const io::StrandSet& truth, std::uint32_t samples = 11);
 
 // At most `max_strands` strands are scored (an even subset). Returns {delta_e_seen, delta_e_unseen (mean, median, p90), delta_e_seen_along,
-// delta_e_seen_local, exposure_gain, strands_scored}.
+// delta_e_seen_local, delta_l_seen and delta_ab_seen (its lightness and hue-saturation parts), exposure_gain, strands_scored}.
 json color_scores(const GroomColors& groom, const ColorTruth& truth, std::uint32_t max_strands);
 
 }  // namespace nf::metrics
