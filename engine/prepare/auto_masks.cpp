@@ -12,29 +12,15 @@
 #include "engine/core/log.hpp"
 #include "engine/core/parallel.hpp"
 #include "engine/core/stats.hpp"
-#include "engine/io/image.hpp"
 #include "engine/prepare/floor_consistency.hpp"
 #include "engine/prepare/keypoint_cover.hpp"
+#include "engine/prepare/photo_mats.hpp"
 #include "engine/prepare/silhouette_check.hpp"
 #include "engine/prepare/tolerant_hull.hpp"
 
 namespace nf::prepare {
 
 namespace {
-
-cv::Mat photo_bgr(const io::Camera& camera) {
-  const io::Image image = io::read_image(camera.image);
-  cv::Mat bgr(int(image.height), int(image.width), CV_8UC3);
-  for (std::uint32_t y = 0; y < image.height; ++y)
-    for (std::uint32_t x = 0; x < image.width; ++x) {
-      cv::Vec3b& px = bgr.at<cv::Vec3b>(int(y), int(x));
-      for (int c = 0; c < 3; ++c) {
-        const float v = image.at(x, y, std::min<std::uint32_t>(std::uint32_t(c), image.channels - 1));
-        px[2 - c] = std::uint8_t(std::clamp(v, 0.f, 1.f) * 255.f + 0.5f);
-      }
-    }
-  return bgr;
-}
 
 std::vector<cv::Point> projected(const io::Camera& camera, const std::vector<glm::dvec3>& world) {
   std::vector<cv::Point> r;
@@ -138,7 +124,6 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
 
   const AnimalBox extent = animal_box(layout);
   const glm::dvec3 base = extent.base;
-  const double horizontal = extent.horizontal;
   const std::vector<glm::dvec3> corners = extent.corners();
 
   const std::size_t views = scene.cameras.size();
@@ -150,9 +135,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   parallel_for(views, [&](std::size_t i0, std::size_t i1) {
     for (std::size_t i = i0; i < i1; ++i) {
       photos[i] = photo_bgr(scene.cameras[i]);
-      cv::Mat g;
-      cv::cvtColor(photos[i], g, cv::COLOR_BGR2GRAY);
-      g.convertTo(grey[i], CV_32F);
+      grey[i] = grey_levels(photos[i]);
     }
   });
   const auto first_cut = [&](std::size_t i) {
@@ -173,8 +156,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
     if (has_floor) {
       // What the other views say of the floor inside the box: floor is background, pixels that no
       // view sees on the floor stand above it (legs and paws, whose sparse points are few).
-      const cv::Rect region = box.size() == 8 ? cv::boundingRect(box) : cv::Rect(0, 0, l.cols, l.rows);
-      const cv::Mat evidence = floor_evidence(scene.cameras, grey, i, floor, base, 1.5 * horizontal, region);
+      const cv::Mat evidence = floor_evidence(scene.cameras, grey, i, floor, base, floor_reach(extent), floor_region(c, extent));
       // Off-floor pixels in a solid patch are certain; lone ones only likely.
       cv::Mat off = evidence == kOffFloor, solid;
       cv::erode(off, solid, cv::Mat());
@@ -249,16 +231,23 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
     });
   };
   each_view(first_cut);
-  // A pose COLMAP got wrong: the photo's own cut (its seeds are its keypoints, where the animal
-  // really is) meets the silhouette the views carve together only when moved. Found in ascending
-  // order, which the caller relies on to erase them from the last.
+  // A pose COLMAP got wrong, seen in the first cuts' evidence: the floor it puts round the animal
+  // is not the floor the other photos show (floor_consistency.hpp); or the photo's own cut (its
+  // seeds are its keypoints, where the animal really is) meets the silhouette the views carve
+  // together only when moved.
+  std::vector<FloorAgreement> floor_agreement(views);
+  for (std::size_t i = 0; i < views; ++i)
+    floor_agreement[i] = {std::size_t(floor_pixels[i]), std::size_t(off_floor_pixels[i]), std::size_t(scene.cameras[i].width) * scene.cameras[i].height};
+  const double median_floor = median_floor_agreement(floor_agreement);
+  report["median_floor_agreement"] = median_floor;
+  for (std::size_t i : floor_refuted_views(floor_agreement)) left_out[i] = 1, out.misplaced.push_back({i, floor_refutation_reason(floor_agreement[i], median_floor)});
   {
     std::vector<std::vector<std::uint8_t>> first(views);
     for (std::size_t i = 0; i < views; ++i) first[i].assign(cut[i].datastart, cut[i].dataend);
     const SilhouetteCheck check = check_silhouettes(scene.cameras, first, extent);
     report["first_cuts"] = check.report(scene.cameras);
     for (std::size_t i = 0; i < views; ++i)
-      if (check.views[i].misplaced) left_out[i] = 1, out.misplaced.push_back({i, check.reason(i)});
+      if (check.views[i].misplaced && !left_out[i]) left_out[i] = 1, out.misplaced.push_back({i, check.reason(i)});
   }
   std::size_t voxels = 0;
   for (std::uint32_t round = 1; round < o.rounds; ++round) {
@@ -307,14 +296,13 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   // The photo's own keypoints on the animal against its mask (keypoint_cover.hpp): a view whose
   // mask leaves most of them out has a pose that puts the animal elsewhere, and is left out.
   const std::vector<KeypointCover> covers = animal_keypoint_cover(scene.cameras, points, animal, background, masks);
-  const std::size_t misplaced_before = out.misplaced.size();
   for (std::size_t i = 0; i < views; ++i)
     if (!left_out[i] && covers[i].refutes()) {
       left_out[i] = 1;
       out.misplaced.push_back({i, covers[i].reason()});
     }
-  if (out.misplaced.size() > misplaced_before)
-    std::sort(out.misplaced.begin(), out.misplaced.end(), [](const StrayCamera& a, const StrayCamera& b) { return a.index < b.index; });
+  // In ascending order, which the caller relies on to erase them from the last.
+  std::sort(out.misplaced.begin(), out.misplaced.end(), [](const StrayCamera& a, const StrayCamera& b) { return a.index < b.index; });
   if (!recut.empty() || !replaced.empty())
     log::warn("prepare: ", recut.size() + replaced.size(), " automatic mask(s) lost the animal or caught something else, and were made again from the other views' hull: ",
               recut.empty() ? replaced.front() : recut.front(), recut.size() + replaced.size() > 1 ? ", ..." : "");
@@ -326,7 +314,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   for (std::size_t i = 0; i < views; ++i) {
     const io::Camera& c = scene.cameras[i];
     per_view.push_back({{"view", c.name}, {"animal_share", double(cv::countNonZero(cut[i])) / double(cut[i].total())}, {"hull_iou", agreement[i]},
-                        {"floor_pixels", floor_pixels[i]}, {"off_floor_pixels", off_floor_pixels[i]},
+                        {"floor_pixels", floor_pixels[i]}, {"off_floor_pixels", off_floor_pixels[i]}, {"floor_agreement", floor_agreement[i].share()},
                         {"animal_keypoints", covers[i].seen}, {"animal_keypoints_inside", covers[i].inside},
                         {"background_keypoints_inside", covers[i].background_inside}, {"background_keypoints_expected", covers[i].background_expected},
                         {"left_out", left_out[i] != 0}});

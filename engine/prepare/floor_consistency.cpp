@@ -3,6 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <sstream>
+
+#include <opencv2/imgproc.hpp>
+
+#include "engine/core/parallel.hpp"
+#include "engine/core/stats.hpp"
+#include "engine/prepare/photo_mats.hpp"
 
 namespace nf::prepare {
 
@@ -45,7 +52,8 @@ std::optional<double> ncc(const float* a, const float* b) {
 }  // namespace
 
 cv::Mat floor_evidence(const std::vector<io::Camera>& cameras, const std::vector<cv::Mat>& grey, std::size_t view,
-                       const FloorPlane& floor, glm::dvec3 centre, double reach, cv::Rect region) {
+                       const FloorPlane& floor, glm::dvec3 centre, double reach, cv::Rect region, int stride) {
+  stride = std::max(1, stride);
   const io::Camera& c = cameras[view];
   cv::Mat evidence = cv::Mat::zeros(grey[view].size(), CV_8U);
   region &= cv::Rect(kHalf, kHalf, grey[view].cols - 2 * kHalf, grey[view].rows - 2 * kHalf);
@@ -60,8 +68,8 @@ cv::Mat floor_evidence(const std::vector<io::Camera>& cameras, const std::vector
   for (const auto& [unused, j] : by_angle) to_camera.push_back(cameras[j].world_to_camera());
 
   float mine[kPatch], theirs[kPatch];
-  for (int y = region.y; y < region.y + region.height; ++y)
-    for (int x = region.x; x < region.x + region.width; ++x) {
+  for (int y = region.y; y < region.y + region.height; y += stride)
+    for (int x = region.x; x < region.x + region.width; x += stride) {
       const glm::dvec2 pixel(x + 0.5, y + 0.5);
       const auto x0 = on_floor(c, pixel, floor), xu = on_floor(c, pixel + glm::dvec2(1, 0), floor), xv = on_floor(c, pixel + glm::dvec2(0, 1), floor);
       if (!x0 || !xu || !xv || glm::distance(*x0, centre) > reach) continue;
@@ -92,6 +100,70 @@ cv::Mat floor_evidence(const std::vector<io::Camera>& cameras, const std::vector
       else if (unsure == 0 && seen >= 3) evidence.at<std::uint8_t>(y, x) = kOffFloor;
     }
   return evidence;
+}
+
+cv::Rect floor_region(const io::Camera& camera, const AnimalBox& box) {
+  const cv::Rect photo(0, 0, int(camera.width), int(camera.height));
+  const glm::dmat4 to_camera = camera.world_to_camera();
+  std::vector<cv::Point> drawn;
+  for (const glm::dvec3& p : box.corners())
+    if (const glm::dvec3 q = camera.project(p, to_camera); q.z > 0) drawn.emplace_back(int(std::lround(q.x)), int(std::lround(q.y)));
+  return drawn.size() == 8 ? cv::boundingRect(drawn) & photo : photo;
+}
+
+std::vector<FloorAgreement> floor_agreement(const std::vector<io::Camera>& cameras, const SceneLayout& layout) {
+  std::vector<FloorAgreement> out(cameras.size());
+  if (!layout.has_floor) return out;
+  const AnimalBox box = animal_box(layout);
+  std::vector<cv::Mat> grey(cameras.size());
+  parallel_for(cameras.size(), [&](std::size_t i0, std::size_t i1) {
+    for (std::size_t i = i0; i < i1; ++i) grey[i] = grey_levels(photo_bgr(cameras[i]));
+  });
+  parallel_for(cameras.size(), [&](std::size_t i0, std::size_t i1) {
+    for (std::size_t i = i0; i < i1; ++i) {
+      const io::Camera& c = cameras[i];
+      // Every stride-th pixel and row: counted with its stride squared, as if each stood for its block.
+      const int stride = std::max(1, int(std::max(c.width, c.height) / 320));
+      const cv::Mat e = floor_evidence(cameras, grey, i, layout.floor, box.base, floor_reach(box), floor_region(c, box), stride);
+      const std::size_t block = std::size_t(stride) * std::size_t(stride);
+      out[i] = {block * std::size_t(cv::countNonZero(e == kFloor)), block * std::size_t(cv::countNonZero(e == kOffFloor)), std::size_t(c.width) * c.height};
+    }
+  });
+  return out;
+}
+
+namespace {
+
+constexpr double kMinJudged = 0.01;     // of the photo's pixels: fewer say too little
+constexpr double kMinMedianShare = 0.5;  // below, the floor itself is too unlike across views to judge by
+constexpr double kRefutingFraction = 1.0 / 3.0;
+
+bool judged_enough(const FloorAgreement& v) { return v.pixels > 0 && double(v.judged()) >= kMinJudged * double(v.pixels); }
+
+}  // namespace
+
+double median_floor_agreement(const std::vector<FloorAgreement>& views) {
+  std::vector<double> shares;
+  for (const FloorAgreement& v : views)
+    if (judged_enough(v)) shares.push_back(v.share());
+  return shares.empty() ? 0.0 : nf::median(shares);
+}
+
+std::vector<std::size_t> floor_refuted_views(const std::vector<FloorAgreement>& views) {
+  const double median = median_floor_agreement(views);
+  std::vector<std::size_t> refuted;
+  if (median < kMinMedianShare) return refuted;
+  for (std::size_t i = 0; i < views.size(); ++i)
+    if (judged_enough(views[i]) && views[i].share() < kRefutingFraction * median) refuted.push_back(i);
+  return refuted;
+}
+
+std::string floor_refutation_reason(const FloorAgreement& view, double median_share) {
+  std::ostringstream s;
+  s.precision(1);
+  s << "the floor its pose puts around the animal matches the other photos' floor at " << std::fixed << 100 * view.share() << " % of " << view.judged()
+    << " pixels judged, where the views' median is " << 100 * median_share << " %: its pose is wrong";
+  return s.str();
 }
 
 }  // namespace nf::prepare

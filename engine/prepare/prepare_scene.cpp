@@ -18,6 +18,7 @@
 #include "engine/prepare/auto_masks.hpp"
 #include "engine/prepare/colmap_command.hpp"
 #include "engine/prepare/colmap_models.hpp"
+#include "engine/prepare/floor_consistency.hpp"
 #include "engine/prepare/known_distance.hpp"
 #include "engine/prepare/scene_layout.hpp"
 #include "engine/prepare/silhouette_check.hpp"
@@ -302,18 +303,28 @@ json prepare_scene(const PrepareOptions& o) {
     for (const io::Camera& c : scene.cameras) made.push_back(io::mask_of(io::read_image(undistorted_masks / "images" / c.image.filename())));
     // The user's masks are the animal: a pose whose mask the views' silhouettes do not meet where
     // it says is COLMAP's error, and the view is left out like a stray.
+    // So is a pose whose floor round the animal is not the floor the other photos show
+    // (floor_consistency.hpp), which a turn round the animal can pass the silhouettes with.
     const auto check_start = std::chrono::steady_clock::now();
+    const std::vector<FloorAgreement> floor = floor_agreement(scene.cameras, layout);
+    const double median_floor = median_floor_agreement(floor);
+    std::vector<StrayCamera> refuted;
+    std::vector<char> floor_refuted(scene.cameras.size(), 0);
+    for (std::size_t i : floor_refuted_views(floor)) floor_refuted[i] = 1, refuted.push_back({i, floor_refutation_reason(floor[i], median_floor)});
+    json floor_report = json::object();
+    for (std::size_t i = 0; i < scene.cameras.size(); ++i) floor_report[scene.cameras[i].name] = {{"agreement", floor[i].share()}, {"pixels_judged", floor[i].judged()}};
+    report["floor"] = {{"median_agreement", median_floor}, {"views", floor_report}};
     const SilhouetteCheck check = check_silhouettes(scene.cameras, made, animal_box(layout));
     report["silhouettes"] = check.report(scene.cameras);
-    std::vector<StrayCamera> refuted;
     for (std::size_t i = 0; i < scene.cameras.size(); ++i) {
-      if (check.views[i].disagrees)
+      if (check.views[i].disagrees && !floor_refuted[i])
         log::warn("prepare: the mask of ", scene.cameras[i].image.filename().string(), " disagrees with the silhouette the views carve together (IoU ",
                   check.views[i].iou, " against the views' median ", check.median_iou, "); check it in previews/");
-      if (check.views[i].misplaced) refuted.push_back({i, check.reason(i)});
+      if (check.views[i].misplaced && !floor_refuted[i]) refuted.push_back({i, check.reason(i)});
     }
+    std::sort(refuted.begin(), refuted.end(), [](const StrayCamera& a, const StrayCamera& b) { return a.index < b.index; });
     leave_out(refuted);
-    steps.add("silhouette_check", since(check_start));
+    steps.add("pose_checks", since(check_start));
     start = std::chrono::steady_clock::now();
   }
   fs::create_directories(work / "images");
