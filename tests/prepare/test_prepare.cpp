@@ -322,10 +322,15 @@ TEST_CASE("prepare on photos as a person takes them: JPEG with EXIF, walked roun
   MESSAGE("hand-held JPEG: ", prepared.cameras.size(), " placed, worst rotation error ", a.worst_angle_deg, " deg, worst centre error ", 100 * a.worst_centre,
           " % of the radius (", a.worst_camera, "), automatic masks IoU median ", a.median_iou, " worst ", a.worst_iou, " from ",
           report["automatic_masks"]["animal_points"].get<std::size_t>(), " animal points");
-  // Every photo placed within the small rig scene's bounds (1.0-3.9 % of the radius measured). The
-  // masks: median 0.93-0.94, worst 0.84-0.91 (0.37-0.66 before the hull kept only the parts holding the animal:
-  // a patch of wall a few views took held in the masks of the views round the path's longest stride).
-  CHECK(prepared.cameras.size() == truth.cameras.size());
+  // Every photo placed within the small rig scene's bounds (1.0-3.9 % of the radius measured), or
+  // left out with its reason: in one of two runs with the floor check, COLMAP misplaced 011 (the
+  // photo after the path's longest stride) and the floor refuted it (1 % of its judged pixels
+  // agreed, the views' median 93 %); in the other 0.95, its centre within 1 %. The masks: median 0.93-0.94, worst
+  // 0.84-0.91 (0.37-0.66 before the hull kept only the parts holding the animal: a patch of wall a
+  // few views took held in the masks of the views round the path's longest stride).
+  MESSAGE("left out: ", report["stray_cameras"].dump());
+  CHECK(prepared.cameras.size() + report["stray_cameras"].size() == truth.cameras.size());
+  CHECK(report["stray_cameras"].size() <= 1);
   CHECK(a.worst_angle_deg < 1.0);
   CHECK(a.worst_centre < 0.06);
   CHECK(a.up_error_deg < 1.0);
