@@ -245,9 +245,18 @@ json prepare_scene(const PrepareOptions& o) {
     io::write_png(mask_input / name, m);
   }
   if (!automatic) steps.add("masks_staged", since(start));
-  steps.add("undistort", run_colmap("image_undistorter", {"--image_path", images.string(), "--input_path", model.string(), "--output_path", undistorted.string(), "--output_type", "COLMAP"}, log_file));
-  if (!automatic)
-    steps.add("undistort_masks", run_colmap("image_undistorter", {"--image_path", mask_input.string(), "--input_path", model.string(), "--output_path", undistorted_masks.string(), "--output_type", "COLMAP"}, log_file));
+  // At the photo's own size and principal point (scale 1): COLMAP's default crops to the pixels
+  // the lens fills, and an odd crop (511 of 512, the centre at 255.5) resamples every pixel half
+  // a pixel off, which blurred the masks' outline (the user's masks' IoU 0.97 against 0.999 when
+  // the crop was even). A strong lens leaves blank pixels at the corners instead.
+  const std::vector<std::string> same_grid{"--output_type", "COLMAP", "--min_scale", "1", "--max_scale", "1"};
+  const auto undistort = [&](const fs::path& from, const fs::path& to) {
+    std::vector<std::string> args{"--image_path", from.string(), "--input_path", model.string(), "--output_path", to.string()};
+    args.insert(args.end(), same_grid.begin(), same_grid.end());
+    return run_colmap("image_undistorter", args, log_file);
+  };
+  steps.add("undistort", undistort(images, undistorted));
+  if (!automatic) steps.add("undistort_masks", undistort(mask_input, undistorted_masks));
   steps.add("model_text", run_colmap("model_converter", {"--input_path", (undistorted / "sparse").string(), "--output_path", undistorted.string(), "--output_type", "TXT"}, log_file));
   // The lens COLMAP found (before undistortion): the user's check that the focal length is sane.
   const fs::path lens = work / "colmap" / "lens";

@@ -42,7 +42,7 @@ Eigen::Matrix3d rotation(const io::Camera& c) {
   return r;
 }
 
-// The true mask's value where a prepared (undistorted, possibly cropped) pinhole pixel looks: both
+// The true mask's value where a prepared (undistorted) pinhole pixel looks: both
 // are pinholes of the same lens once undistorted, so the ray through the pixel maps by intrinsics.
 bool true_inside(const io::Camera& prepared, const io::Camera& truth, const std::vector<std::uint8_t>& mask, std::uint32_t x, std::uint32_t y) {
   const double u = (x + 0.5 - prepared.cx) / prepared.fx * truth.fx + truth.cx, v = (y + 0.5 - prepared.cy) / prepared.fy * truth.fy + truth.cy;
@@ -97,6 +97,7 @@ Agreement compare(const io::Scene& prepared, const io::Scene& truth, const fs::p
     if (off > r.worst_centre) r.worst_centre = off, r.worst_camera = p.name;
     r.centres.push_back(off);
     r.angles_deg.push_back(std::acos(std::clamp((d.trace() - 1) / 2, -1.0, 1.0)) * 180 / M_PI);
+    if (p.mask.empty()) continue;  // poses alone
     const std::vector<std::uint8_t> pm = io::mask_of(io::read_image(p.mask)), tm = io::mask_of(io::read_image(t.mask));
     std::size_t both = 0, either = 0;
     for (std::uint32_t y = 0; y < p.height; ++y)
@@ -108,8 +109,44 @@ Agreement compare(const io::Scene& prepared, const io::Scene& truth, const fs::p
     if (ious.back() < r.worst_iou) r.worst_iou = ious.back(), r.worst_iou_camera = p.name, r.worst_iou_index = ious.size() - 1;
   }
   std::sort(ious.begin(), ious.end());
-  r.median_iou = ious[ious.size() / 2];
+  r.median_iou = ious.empty() ? 0.0 : ious[ious.size() / 2];
   return r;
+}
+
+// Where COLMAP's model put the photos prepare left out, against the truth (the similarity fitted
+// to all of the model's cameras): whether leaving each out was right.
+struct LeftOut {
+  std::string photo;
+  double centre = 0, angle_deg = 0;  // the centre's error as a share of the radius; the rotation's
+};
+std::vector<LeftOut> left_out_poses(const json& report, const fs::path& model, const fs::path& scratch, const io::Scene& truth, const fs::path& truth_root) {
+  if (report["stray_cameras"].empty()) return {};
+  fs::remove_all(scratch);
+  fs::create_directories(scratch);
+  prepare::run_colmap("model_converter", {"--input_path", model.string(), "--output_path", scratch.string(), "--output_type", "TXT"}, scratch.string() + ".log");
+  // The poses do not depend on the lens's distortion, which the scene reader refuses: zeroed.
+  std::vector<std::string> lines;
+  {
+    std::ifstream in(scratch / "cameras.txt");
+    for (std::string line; std::getline(in, line);) {
+      std::istringstream f(line);
+      std::vector<std::string> w;
+      for (std::string x; f >> x;) w.push_back(x);
+      if (!line.empty() && line[0] != '#' && w.size() > 7 && w[1] == "SIMPLE_RADIAL") w.resize(7), w.push_back("0");
+      std::string joined;
+      for (const std::string& x : w) joined += (joined.empty() ? "" : " ") + x;
+      lines.push_back(line.empty() || line[0] == '#' ? line : joined);
+    }
+  }
+  std::ofstream(scratch / "cameras.txt") << [&] { std::string all; for (const std::string& l : lines) all += l + "\n"; return all; }();
+  io::Scene placed = io::read_colmap_scene(scratch);
+  for (io::Camera& c : placed.cameras) c.mask.clear();
+  const Agreement a = compare(placed, truth, truth_root);
+  std::vector<LeftOut> out;
+  for (const json& s : report["stray_cameras"])
+    for (std::size_t i = 0; i < placed.cameras.size(); ++i)
+      if (placed.cameras[i].image.filename() == s["photo"].get<std::string>()) out.push_back({s["photo"].get<std::string>(), a.centres[i], a.angles_deg[i]});
+  return out;
 }
 
 // One textured synth scene for the cases below. The default suite's is small (320 px: a minute of
@@ -203,6 +240,12 @@ TEST_CASE("prepare places every photo of a textured synth scene near the true ca
   double worst_silhouette = 1;
   for (const auto& [name, view] : silhouettes["views"].items()) worst_silhouette = std::min(worst_silhouette, view["iou"].get<double>());
   MESSAGE("silhouettes: median IoU ", silhouettes["median_iou"].get<double>(), ", worst ", worst_silhouette, "; left out: ", report["stray_cameras"].dump());
+  // A pose left out was wrong: COLMAP's own pose of it lies well off the truth (seen: 011 at 0.93
+  // radii and 4.7 degrees, refuted by the floor, whose silhouette IoU 0.17 no slide explained).
+  for (const LeftOut& l : left_out_poses(report, o.out / "colmap" / "sparse" / "0", f.root / "left_out_model", f.truth, f.root / "truth")) {
+    MESSAGE("COLMAP's pose of ", l.photo, ": ", 100 * l.centre, " % of the radius and ", l.angle_deg, " degrees off");
+    CHECK((l.centre > 0.05 || l.angle_deg > 1.0));
+  }
   CHECK(report["placed"].get<std::size_t>() + report["stray_cameras"].size() == 36);
   CHECK(report["stray_cameras"].size() <= 1);
   CHECK(report["not_placed"].size() == report["stray_cameras"].size());
