@@ -52,7 +52,11 @@ std::optional<double> ncc(const float* a, const float* b) {
 }  // namespace
 
 cv::Mat floor_evidence(const std::vector<io::Camera>& cameras, const std::vector<cv::Mat>& grey, std::size_t view,
-                       const FloorPlane& floor, glm::dvec3 centre, double reach, cv::Rect region, int stride) {
+                       const FloorPlane& floor, glm::dvec3 centre, double reach, cv::Rect region, int stride,
+                       const std::vector<char>* left_out, double slack_px) {
+  // Within the slack, the best of a 9 x 9 grid of shifts of the other view's patch.
+  const int shifts = slack_px > 0 ? 4 : 0;
+  const double shift_step = shifts ? slack_px / shifts : 0.0;
   stride = std::max(1, stride);
   const io::Camera& c = cameras[view];
   cv::Mat evidence = cv::Mat::zeros(grey[view].size(), CV_8U);
@@ -61,7 +65,7 @@ cv::Mat floor_evidence(const std::vector<io::Camera>& cameras, const std::vector
   const glm::dvec3 look = glm::normalize(centre - c.centre());
   std::vector<std::pair<double, std::size_t>> by_angle;
   for (std::size_t j = 0; j < cameras.size(); ++j)
-    if (j != view) by_angle.emplace_back(-glm::dot(look, glm::normalize(centre - cameras[j].centre())), j);
+    if (j != view && !(left_out && (*left_out)[j])) by_angle.emplace_back(-glm::dot(look, glm::normalize(centre - cameras[j].centre())), j);
   std::sort(by_angle.begin(), by_angle.end());
   by_angle.resize(std::min(by_angle.size(), kCompared));
   std::vector<glm::dmat4> to_camera;
@@ -83,21 +87,28 @@ cv::Mat floor_evidence(const std::vector<io::Camera>& cameras, const std::vector
         if (q0.z <= 0) continue;
         // The patch carried through the floor: the local affine map of the plane-induced homography.
         const glm::dvec2 du = glm::dvec2(qu) - glm::dvec2(q0), dv = glm::dvec2(qv) - glm::dvec2(q0);
-        const double spread = kHalf * (std::abs(du.x) + std::abs(dv.x) + std::abs(du.y) + std::abs(dv.y)) + 2;
+        const double spread = kHalf * (std::abs(du.x) + std::abs(dv.x) + std::abs(du.y) + std::abs(dv.y)) + 2 + slack_px;
         if (q0.x < spread || q0.y < spread || q0.x > grey[j].cols - spread || q0.y > grey[j].rows - spread) continue;
-        for (int k = 0, dy = -kHalf; dy <= kHalf; ++dy)
-          for (int dx = -kHalf; dx <= kHalf; ++dx) {
-            const glm::dvec2 at = glm::dvec2(q0) + double(dx) * du + double(dy) * dv;
-            theirs[k++] = bilinear(grey[j], at.x, at.y);
+        std::optional<double> score;
+        for (int sy = -shifts; sy <= shifts; ++sy)
+          for (int sx = -shifts; sx <= shifts; ++sx) {
+            const glm::dvec2 centre_at = glm::dvec2(q0) + shift_step * glm::dvec2(sx, sy);
+            for (int k = 0, dy = -kHalf; dy <= kHalf; ++dy)
+              for (int dx = -kHalf; dx <= kHalf; ++dx) {
+                const glm::dvec2 at = centre_at + double(dx) * du + double(dy) * dv;
+                theirs[k++] = bilinear(grey[j], at.x, at.y);
+              }
+            if (const auto shifted = ncc(mine, theirs); shifted && (!score || *shifted > *score)) score = shifted;
           }
-        const auto score = ncc(mine, theirs);
         if (!score) continue;
         ++seen;
         agree += *score > kAgree;
         unsure += *score >= kDisagree;
       }
       if (agree >= 3) evidence.at<std::uint8_t>(y, x) = kFloor;
-      else if (unsure == 0 && seen >= 3) evidence.at<std::uint8_t>(y, x) = kOffFloor;
+      // With slack, the best of many shifts is often a weak match by chance: a patch is off the
+      // floor when it is not floor.
+      else if ((unsure == 0 || shifts > 0) && seen >= 3) evidence.at<std::uint8_t>(y, x) = kOffFloor;
     }
   return evidence;
 }
@@ -111,23 +122,33 @@ cv::Rect floor_region(const io::Camera& camera, const AnimalBox& box) {
   return drawn.size() == 8 ? cv::boundingRect(drawn) & photo : photo;
 }
 
-std::vector<FloorAgreement> floor_agreement(const std::vector<io::Camera>& cameras, const SceneLayout& layout) {
-  std::vector<FloorAgreement> out(cameras.size());
-  if (!layout.has_floor) return out;
-  const AnimalBox box = animal_box(layout);
+std::vector<cv::Mat> grey_photos(const std::vector<io::Camera>& cameras) {
   std::vector<cv::Mat> grey(cameras.size());
   parallel_for(cameras.size(), [&](std::size_t i0, std::size_t i1) {
     for (std::size_t i = i0; i < i1; ++i) grey[i] = grey_levels(photo_bgr(cameras[i]));
   });
+  return grey;
+}
+
+FloorAgreement view_floor_agreement(const std::vector<io::Camera>& cameras, const std::vector<cv::Mat>& grey, const SceneLayout& layout, std::size_t view,
+                                    const std::vector<char>* left_out, double slack_deg) {
+  const io::Camera& c = cameras[view];
+  if (!layout.has_floor) return {0, 0, std::size_t(c.width) * c.height};
+  const AnimalBox box = animal_box(layout);
+  // Every stride-th pixel and row: counted with its stride squared, as if each stood for its block.
+  const int stride = std::max(1, int(std::max(c.width, c.height) / 320));
+  const double slack_px = c.fx * std::tan(slack_deg * M_PI / 180.0);
+  const cv::Mat e = floor_evidence(cameras, grey, view, layout.floor, box.base, floor_reach(box), floor_region(c, box), stride, left_out, slack_px);
+  const std::size_t block = std::size_t(stride) * std::size_t(stride);
+  return {block * std::size_t(cv::countNonZero(e == kFloor)), block * std::size_t(cv::countNonZero(e == kOffFloor)), std::size_t(c.width) * c.height};
+}
+
+std::vector<FloorAgreement> floor_agreement(const std::vector<io::Camera>& cameras, const std::vector<cv::Mat>& grey, const SceneLayout& layout,
+                                            const std::vector<char>* left_out) {
+  std::vector<FloorAgreement> out(cameras.size());
   parallel_for(cameras.size(), [&](std::size_t i0, std::size_t i1) {
-    for (std::size_t i = i0; i < i1; ++i) {
-      const io::Camera& c = cameras[i];
-      // Every stride-th pixel and row: counted with its stride squared, as if each stood for its block.
-      const int stride = std::max(1, int(std::max(c.width, c.height) / 320));
-      const cv::Mat e = floor_evidence(cameras, grey, i, layout.floor, box.base, floor_reach(box), floor_region(c, box), stride);
-      const std::size_t block = std::size_t(stride) * std::size_t(stride);
-      out[i] = {block * std::size_t(cv::countNonZero(e == kFloor)), block * std::size_t(cv::countNonZero(e == kOffFloor)), std::size_t(c.width) * c.height};
-    }
+    for (std::size_t i = i0; i < i1; ++i)
+      if (!(left_out && (*left_out)[i])) out[i] = view_floor_agreement(cameras, grey, layout, i, left_out, 0.0);
   });
   return out;
 }
@@ -158,12 +179,44 @@ std::vector<std::size_t> floor_refuted_views(const std::vector<FloorAgreement>& 
   return refuted;
 }
 
-std::string floor_refutation_reason(const FloorAgreement& view, double median_share) {
+std::string floor_refutation_reason(const FloorAgreement& view, const FloorAgreement& with_slack, double median_share) {
   std::ostringstream s;
   s.precision(1);
   s << "the floor its pose puts around the animal matches the other photos' floor at " << std::fixed << 100 * view.share() << " % of " << view.judged()
-    << " pixels judged, where the views' median is " << 100 * median_share << " %: its pose is wrong";
+    << " pixels judged (" << 100 * with_slack.share() << " % with a degree's slack), where the views' median is " << 100 * median_share << " %: its pose is wrong";
   return s.str();
+}
+
+std::vector<FloorRefutation> refute_poses_by_floor(std::vector<FloorAgreement>& agreement, std::vector<char>& left_out,
+                                                   const std::function<std::vector<FloorAgreement>()>& find,
+                                                   const std::function<FloorAgreement(std::size_t)>& with_slack) {
+  std::vector<FloorRefutation> refuted;
+  std::vector<FloorAgreement> refuting;  // what each refuted view agreed when it was refuted
+  std::vector<char> cleared(left_out.size(), 0);  // candidates the slack brought back
+  for (agreement = find();;) {
+    std::vector<std::size_t> candidates;  // left-out views judge nothing
+    for (std::size_t i : floor_refuted_views(agreement))
+      if (!cleared[i]) candidates.push_back(i);
+    std::sort(candidates.begin(), candidates.end(), [&](std::size_t a, std::size_t b) { return agreement[a].share() < agreement[b].share(); });
+    const double median = median_floor_agreement(agreement);
+    std::optional<std::size_t> worst;
+    for (std::size_t i : candidates) {
+      const FloorAgreement slack = with_slack(i);
+      if (slack.judged() > 0 && slack.share() < kRefutingFraction * median) {
+        worst = i;
+        refuted.push_back({i, floor_refutation_reason(agreement[i], slack, median)});
+        refuting.push_back(agreement[i]);
+        break;
+      }
+      cleared[i] = 1;
+    }
+    if (!worst) break;
+    left_out[*worst] = 1;
+    agreement = find();
+  }
+  for (std::size_t k = 0; k < refuted.size(); ++k) agreement[refuted[k].view] = refuting[k];
+  std::sort(refuted.begin(), refuted.end(), [](const FloorRefutation& a, const FloorRefutation& b) { return a.view < b.view; });
+  return refuted;
 }
 
 }  // namespace nf::prepare

@@ -6,6 +6,7 @@
 // and agree too. A patch comparison (normalised cross-correlation) rather than colour, so fur of
 // one colour seen at the floor point in another view does not pass for floor.
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -23,9 +24,14 @@ enum FloorEvidence : std::uint8_t { kUnknown = 0, kFloor = 1, kOffFloor = 2 };
 // patch carried through the floor, kOffFloor where the patch is textured, its floor point lies
 // within `reach` of `centre`, at least three views see that point and none agrees. `grey` holds
 // every view's photo (CV_32F, 0-255). The rest is kUnknown (untextured patches, the wall, the sky,
-// and with `stride` > 1 the pixels between every stride-th one of each stride-th row).
+// and with `stride` > 1 the pixels between every stride-th one of each stride-th row). Views
+// flagged in `left_out` (a pose found wrong) are not compared with.
+// With `slack_px` > 0 a patch agrees when it does anywhere within that many pixels of where the
+// pose carries it (the best of a 9 x 9 grid of shifts), and a textured patch three views see that
+// is not floor is off it: a pose a little off is told from a wrong one.
 cv::Mat floor_evidence(const std::vector<io::Camera>& cameras, const std::vector<cv::Mat>& grey, std::size_t view,
-                       const FloorPlane& floor, glm::dvec3 centre, double reach, cv::Rect region, int stride = 1);
+                       const FloorPlane& floor, glm::dvec3 centre, double reach, cv::Rect region, int stride = 1,
+                       const std::vector<char>* left_out = nullptr, double slack_px = 0);
 
 // Where a view's floor evidence is looked for: the animal's box drawn into it (its bounding
 // rectangle; the whole photo when the camera is inside the box), and how far from the box's foot.
@@ -50,12 +56,38 @@ struct FloorAgreement {
 std::vector<std::size_t> floor_refuted_views(const std::vector<FloorAgreement>& views);
 // The views' median agreeing share (over views with 1 % judged); 0 when none is.
 double median_floor_agreement(const std::vector<FloorAgreement>& views);
-std::string floor_refutation_reason(const FloorAgreement& view, double median_share);
+std::string floor_refutation_reason(const FloorAgreement& view, const FloorAgreement& with_slack, double median_share);
 
-// Every view's floor agreement where no automatic mask computed it (the user's masks), from the
-// cameras' photos: the evidence in floor_region on every stride-th pixel, the stride making the
-// longer side about 320 judged pixels (a statistic, not a mask: photos of many megapixels cost what
-// small ones do). Views count nothing when the layout has no floor.
-std::vector<FloorAgreement> floor_agreement(const std::vector<io::Camera>& cameras, const SceneLayout& layout);
+// The poses the floor refutes, one at a time. A candidate (floor_refuted_views) is judged again
+// with a degree's slack (`with_slack`): COLMAP's right poses lie up to a degree off at small
+// sizes (0.5 degrees is 4 px at 320 px, enough to take a fine floor's agreement to 8 %), a wrong
+// one much further. A wrong view lowers the agreement of the views compared with it (a turned
+// view's neighbour fell from 0.9 to 0.37), so after each refutation, the least agreeing view
+// first, `find` is asked again for every view's agreement with the views `left_out` flags (which
+// it neither judges nor compares with). Returns {view, reason} in ascending order of view;
+// `left_out` gains them, `agreement` ends as the last finding (a view refuted keeps the agreement
+// that refuted it).
+struct FloorRefutation {
+  std::size_t view;
+  std::string reason;
+};
+std::vector<FloorRefutation> refute_poses_by_floor(std::vector<FloorAgreement>& agreement, std::vector<char>& left_out,
+                                                   const std::function<std::vector<FloorAgreement>()>& find,
+                                                   const std::function<FloorAgreement(std::size_t)>& with_slack);
+// The slack a candidate is judged with again: COLMAP's right poses of the default suite's 320 px
+// dog lie within 0.5 degrees (the test allows 1).
+constexpr double kFloorSlackDeg = 1.0;
+// One view's agreement as floor_agreement counts it, with `slack_deg` degrees of slack.
+FloorAgreement view_floor_agreement(const std::vector<io::Camera>& cameras, const std::vector<cv::Mat>& grey, const SceneLayout& layout, std::size_t view,
+                                    const std::vector<char>* left_out, double slack_deg);
+
+// The views' photos as floor_evidence reads them (grey levels, CV_32F).
+std::vector<cv::Mat> grey_photos(const std::vector<io::Camera>& cameras);
+// Every view's floor agreement where no automatic mask computed it (the user's masks): the
+// evidence in floor_region on every stride-th pixel, the stride making the longer side about 320
+// judged pixels (a statistic, not a mask: photos of many megapixels cost what small ones do). Views
+// count nothing when the layout has no floor, or when `left_out` flags them.
+std::vector<FloorAgreement> floor_agreement(const std::vector<io::Camera>& cameras, const std::vector<cv::Mat>& grey, const SceneLayout& layout,
+                                            const std::vector<char>* left_out = nullptr);
 
 }  // namespace nf::prepare

@@ -315,11 +315,18 @@ json prepare_scene(const PrepareOptions& o) {
     // So is a pose whose floor round the animal is not the floor the other photos show
     // (floor_consistency.hpp), which a turn round the animal can pass the silhouettes with.
     const auto check_start = std::chrono::steady_clock::now();
-    const std::vector<FloorAgreement> floor = floor_agreement(scene.cameras, layout);
-    const double median_floor = median_floor_agreement(floor);
-    std::vector<StrayCamera> refuted;
+    std::vector<FloorAgreement> floor;
     std::vector<char> floor_refuted(scene.cameras.size(), 0);
-    for (std::size_t i : floor_refuted_views(floor)) floor_refuted[i] = 1, refuted.push_back({i, floor_refutation_reason(floor[i], median_floor)});
+    std::vector<StrayCamera> refuted;
+    if (layout.has_floor) {
+      const std::vector<cv::Mat> grey = grey_photos(scene.cameras);
+      const auto find_all = [&] { return floor_agreement(scene.cameras, grey, layout, &floor_refuted); };
+      const auto with_slack = [&](std::size_t i) { return view_floor_agreement(scene.cameras, grey, layout, i, &floor_refuted, kFloorSlackDeg); };
+      for (const FloorRefutation& r : refute_poses_by_floor(floor, floor_refuted, find_all, with_slack)) refuted.push_back({r.view, r.reason});
+    } else {
+      floor.resize(scene.cameras.size());
+    }
+    const double median_floor = median_floor_agreement(floor);
     json floor_report = json::object();
     for (std::size_t i = 0; i < scene.cameras.size(); ++i) floor_report[scene.cameras[i].name] = {{"agreement", floor[i].share()}, {"pixels_judged", floor[i].judged()}};
     report["floor"] = {{"median_agreement", median_floor}, {"views", floor_report}};
