@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <regex>
+#include <map>
 #include <set>
 
 #include "engine/core/json.hpp"
@@ -246,15 +247,21 @@ TEST_CASE("batch, Slurm backend: a job array on a real one-node cluster, one tas
   mark("scancel --batch --signal=TERM " + job + "_1 (" + scenes[1].name + ", in its fur stage)" +
        (cancelled.empty() ? "" : ": " + cancelled.substr(0, cancelled.find('\n'))));
 
-  // Slurm holds a requeued job for two minutes before it may start again; the test releases them.
+  // Slurm holds a requeued job for two minutes before it may start again; the test releases them,
+  // 10 s on: a requeued task released at once was started while its last run was still being torn
+  // down, and Slurm killed it ("Job credential revoked") with nothing left to requeue it.
   bool all_done = false;
   std::set<std::string> resumed;
+  std::map<std::string, double> released;  // job id -> when it was last released (t0's seconds)
   while (!all_done && t0.seconds() < 600) {
     std::this_thread::sleep_for(std::chrono::seconds(2));
     const std::string pending = shell(env + " squeue -h -t PD -r -o '%i %r'");
     std::istringstream lines(pending);
     for (std::string id, reason; lines >> id >> reason;)
-      if (reason == "BeginTime") (void)shell(env + " scontrol update JobId=" + id + " StartTime=now");
+      if (reason == "BeginTime" && (!released.count(id) || t0.seconds() > released[id] + 20)) {
+        (void)shell(env + " scontrol update JobId=" + id + " StartTime=now+10");
+        released[id] = t0.seconds();
+      }
     for (const Scene& s : scenes)
       if (!resumed.count(s.name) && slurp(batch / "logs" / (s.name + ".log")).find("fur: resuming from") != std::string::npos) {
         resumed.insert(s.name);
