@@ -105,7 +105,6 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   json& report = out.report;
   const glm::dvec3 focus = layout.focus;
   const double reach = layout.reach;
-  const FloorPlane& floor = layout.floor;
   const bool has_floor = layout.has_floor;
   const std::vector<char>&animal = layout.animal, &background = layout.background;
   const std::vector<glm::dvec3>& animal_points = layout.animal_points;
@@ -123,7 +122,6 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   if (!has_floor) log::warn("prepare: no floor found among the sparse points; the automatic masks rely on the animal's distance from the cameras alone");
 
   const AnimalBox extent = animal_box(layout);
-  const glm::dvec3 base = extent.base;
   const std::vector<glm::dvec3> corners = extent.corners();
 
   const std::size_t views = scene.cameras.size();
@@ -237,7 +235,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   std::vector<FloorAgreement> floor_agreement(views);
   const auto find_floor = [&](std::size_t i) {
     const io::Camera& c = scene.cameras[i];
-    floor_evidences[i] = floor_evidence(scene.cameras, grey, i, floor, base, floor_reach(extent), floor_region(c, extent), 1, &left_out);
+    floor_evidences[i] = floor_evidence_round_animal(scene.cameras, grey, layout, i, 1, &left_out);
     floor_pixels[i] = cv::countNonZero(floor_evidences[i] == kFloor), off_floor_pixels[i] = cv::countNonZero(floor_evidences[i] == kOffFloor);
     floor_agreement[i] = {std::size_t(floor_pixels[i]), std::size_t(off_floor_pixels[i]), std::size_t(c.width) * c.height};
   };

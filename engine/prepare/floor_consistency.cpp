@@ -122,6 +122,12 @@ cv::Rect floor_region(const io::Camera& camera, const AnimalBox& box) {
   return drawn.size() == 8 ? cv::boundingRect(drawn) & photo : photo;
 }
 
+cv::Mat floor_evidence_round_animal(const std::vector<io::Camera>& cameras, const std::vector<cv::Mat>& grey, const SceneLayout& layout, std::size_t view,
+                                   int stride, const std::vector<char>* left_out, double slack_px) {
+  const AnimalBox box = animal_box(layout);
+  return floor_evidence(cameras, grey, view, layout.floor, box.base, floor_reach(box), floor_region(cameras[view], box), stride, left_out, slack_px);
+}
+
 std::vector<cv::Mat> grey_photos(const std::vector<io::Camera>& cameras) {
   std::vector<cv::Mat> grey(cameras.size());
   parallel_for(cameras.size(), [&](std::size_t i0, std::size_t i1) {
@@ -134,11 +140,10 @@ FloorAgreement view_floor_agreement(const std::vector<io::Camera>& cameras, cons
                                     const std::vector<char>* left_out, double slack_deg) {
   const io::Camera& c = cameras[view];
   if (!layout.has_floor) return {0, 0, std::size_t(c.width) * c.height};
-  const AnimalBox box = animal_box(layout);
   // Every stride-th pixel and row: counted with its stride squared, as if each stood for its block.
   const int stride = std::max(1, int(std::max(c.width, c.height) / 320));
   const double slack_px = c.fx * std::tan(slack_deg * M_PI / 180.0);
-  const cv::Mat e = floor_evidence(cameras, grey, view, layout.floor, box.base, floor_reach(box), floor_region(c, box), stride, left_out, slack_px);
+  const cv::Mat e = floor_evidence_round_animal(cameras, grey, layout, view, stride, left_out, slack_px);
   const std::size_t block = std::size_t(stride) * std::size_t(stride);
   return {block * std::size_t(cv::countNonZero(e == kFloor)), block * std::size_t(cv::countNonZero(e == kOffFloor)), std::size_t(c.width) * c.height};
 }

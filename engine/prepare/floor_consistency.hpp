@@ -37,6 +37,10 @@ cv::Mat floor_evidence(const std::vector<io::Camera>& cameras, const std::vector
 // rectangle; the whole photo when the camera is inside the box), and how far from the box's foot.
 cv::Rect floor_region(const io::Camera& camera, const AnimalBox& box);
 inline double floor_reach(const AnimalBox& box) { return 1.5 * box.horizontal; }
+// floor_evidence of `view` round the animal of `layout`: in floor_region, within floor_reach of
+// its box's foot.
+cv::Mat floor_evidence_round_animal(const std::vector<io::Camera>& cameras, const std::vector<cv::Mat>& grey, const SceneLayout& layout, std::size_t view,
+                                   int stride = 1, const std::vector<char>* left_out = nullptr, double slack_px = 0);
 
 // How much of the floor a view's pose puts under the animal matches the other photos' floor.
 // Through a right pose most judged pixels agree (0.82-0.96 on the default suite's dog); through a

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <sstream>
 
@@ -113,6 +114,36 @@ Agreement compare(const io::Scene& prepared, const io::Scene& truth, const fs::p
   return r;
 }
 
+// COLMAP model `model` as text in `out`, the data lines of its `file` (cameras.txt, images.txt)
+// split into words for `edit` to change (comments are kept as they are).
+void text_model(const fs::path& model, const fs::path& out, const std::string& file, const std::function<void(std::vector<std::vector<std::string>>&)>& edit) {
+  fs::create_directories(out);
+  prepare::run_colmap("model_converter", {"--input_path", model.string(), "--output_path", out.string(), "--output_type", "TXT"}, out.string() + ".log");
+  std::vector<std::string> lines;
+  std::vector<std::vector<std::string>> rows;
+  std::vector<std::size_t> row_line;
+  {
+    std::ifstream in(out / file);
+    for (std::string line; std::getline(in, line);) {
+      if (!line.empty() && line[0] != '#') {
+        std::istringstream f(line);
+        rows.emplace_back();
+        for (std::string w; f >> w;) rows.back().push_back(w);
+        row_line.push_back(lines.size());
+      }
+      lines.push_back(line);
+    }
+  }
+  edit(rows);
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    std::string joined;
+    for (const std::string& w : rows[r]) joined += (joined.empty() ? "" : " ") + w;
+    lines[row_line[r]] = joined;
+  }
+  std::ofstream o(out / file);
+  for (const std::string& line : lines) o << line << "\n";
+}
+
 // Where COLMAP's model put the photos prepare left out, against the truth (the similarity fitted
 // to all of the model's cameras): whether leaving each out was right.
 struct LeftOut {
@@ -122,23 +153,11 @@ struct LeftOut {
 std::vector<LeftOut> left_out_poses(const json& report, const fs::path& model, const fs::path& scratch, const io::Scene& truth, const fs::path& truth_root) {
   if (report["stray_cameras"].empty()) return {};
   fs::remove_all(scratch);
-  fs::create_directories(scratch);
-  prepare::run_colmap("model_converter", {"--input_path", model.string(), "--output_path", scratch.string(), "--output_type", "TXT"}, scratch.string() + ".log");
   // The poses do not depend on the lens's distortion, which the scene reader refuses: zeroed.
-  std::vector<std::string> lines;
-  {
-    std::ifstream in(scratch / "cameras.txt");
-    for (std::string line; std::getline(in, line);) {
-      std::istringstream f(line);
-      std::vector<std::string> w;
-      for (std::string x; f >> x;) w.push_back(x);
-      if (!line.empty() && line[0] != '#' && w.size() > 7 && w[1] == "SIMPLE_RADIAL") w.resize(7), w.push_back("0");
-      std::string joined;
-      for (const std::string& x : w) joined += (joined.empty() ? "" : " ") + x;
-      lines.push_back(line.empty() || line[0] == '#' ? line : joined);
-    }
-  }
-  std::ofstream(scratch / "cameras.txt") << [&] { std::string all; for (const std::string& l : lines) all += l + "\n"; return all; }();
+  text_model(model, scratch, "cameras.txt", [](std::vector<std::vector<std::string>>& rows) {
+    for (std::vector<std::string>& w : rows)
+      if (w.size() > 7 && w[1] == "SIMPLE_RADIAL") w.resize(7), w.push_back("0");
+  });
   io::Scene placed = io::read_colmap_scene(scratch);
   for (io::Camera& c : placed.cameras) c.mask.clear();
   const Agreement a = compare(placed, truth, truth_root);
@@ -189,33 +208,16 @@ bool refuted_by_floor(const json& report, const std::string& photo) {
 // own keypoints kept: a pose COLMAP got wrong, turned round the ring, still aimed at the animal.
 fs::path model_with_pose_of(const fs::path& model, const fs::path& out, const std::string& victim, const std::string& donor) {
   if (fs::exists(out / "images.txt")) return out;  // made by an earlier case
-  fs::create_directories(out);
-  prepare::run_colmap("model_converter", {"--input_path", model.string(), "--output_path", out.string(), "--output_type", "TXT"}, out.string() + ".log");
-  std::vector<std::string> lines;
-  {
-    std::ifstream in(out / "images.txt");
-    for (std::string line; std::getline(in, line);) lines.push_back(line);
-  }
   // IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME: ten fields, where a keypoints' line has 3 per point.
-  std::map<std::string, std::size_t> line_of;
-  const auto fields = [&](std::size_t k) {
-    std::istringstream s(lines[k]);
-    std::vector<std::string> f;
-    for (std::string w; s >> w;) f.push_back(w);
-    return f;
-  };
-  for (std::size_t k = 0; k < lines.size(); ++k)
-    if (!lines[k].empty() && lines[k][0] != '#' && fields(k).size() == 10) line_of[fields(k)[9]] = k;
-  REQUIRE(line_of.count(victim) == 1);
-  REQUIRE(line_of.count(donor) == 1);
-  std::vector<std::string> v = fields(line_of[victim]);
-  const std::vector<std::string> d = fields(line_of[donor]);
-  std::copy(d.begin() + 1, d.begin() + 8, v.begin() + 1);
-  std::string joined;
-  for (const std::string& w : v) joined += (joined.empty() ? "" : " ") + w;
-  lines[line_of[victim]] = joined;
-  std::ofstream o(out / "images.txt");
-  for (const std::string& line : lines) o << line << "\n";
+  text_model(model, out, "images.txt", [&](std::vector<std::vector<std::string>>& rows) {
+    std::map<std::string, std::size_t> row_of;
+    for (std::size_t k = 0; k < rows.size(); ++k)
+      if (rows[k].size() == 10) row_of[rows[k][9]] = k;
+    REQUIRE(row_of.count(victim) == 1);
+    REQUIRE(row_of.count(donor) == 1);
+    const std::vector<std::string> d = rows[row_of[donor]];
+    std::copy(d.begin() + 1, d.begin() + 8, rows[row_of[victim]].begin() + 1);
+  });
   return out;
 }
 
