@@ -14,6 +14,7 @@
 #include "engine/core/stats.hpp"
 #include "engine/prepare/floor_consistency.hpp"
 #include "engine/prepare/keypoint_cover.hpp"
+#include "engine/prepare/mask_outline.hpp"
 #include "engine/prepare/photo_mats.hpp"
 #include "engine/prepare/silhouette_check.hpp"
 #include "engine/prepare/tolerant_hull.hpp"
@@ -299,6 +300,14 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   }
   report["recut_from_hull"] = recut;
   report["replaced_by_hull"] = replaced;
+  // The cuts' outlines onto the photos' edges (mask_outline.hpp): GrabCut's smoothness term leaves
+  // them a pixel or two off, on either side.
+  std::vector<int> outline_moved(views, 0);
+  each_view([&](std::size_t i) {
+    const cv::Mat snapped = snap_outline_to_photo(photos[i], cut[i]);
+    outline_moved[i] = cv::countNonZero(snapped != cut[i]);
+    cut[i] = snapped;
+  });
   std::vector<std::vector<std::uint8_t>> masks(views);
   for (std::size_t i = 0; i < views; ++i) {
     const io::Camera& c = scene.cameras[i];
@@ -327,7 +336,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   for (std::size_t i = 0; i < views; ++i) {
     const io::Camera& c = scene.cameras[i];
     per_view.push_back({{"view", c.name}, {"animal_share", double(cv::countNonZero(cut[i])) / double(cut[i].total())}, {"hull_iou", agreement[i]},
-                        {"floor_pixels", floor_pixels[i]}, {"off_floor_pixels", off_floor_pixels[i]}, {"floor_agreement", floor_agreement[i].share()},
+                        {"outline_moved_pixels", outline_moved[i]}, {"floor_pixels", floor_pixels[i]}, {"off_floor_pixels", off_floor_pixels[i]}, {"floor_agreement", floor_agreement[i].share()},
                         {"animal_keypoints", covers[i].seen}, {"animal_keypoints_inside", covers[i].inside},
                         {"background_keypoints_inside", covers[i].background_inside}, {"background_keypoints_expected", covers[i].background_expected},
                         {"left_out", left_out[i] != 0}});

@@ -6,7 +6,7 @@
 // background points and by what the other photos say of its floor (floor_consistency.hpp: the legs
 // and the body seen against the floor stand out, the floor and shadows on it agree); then the masks
 // are made to agree across views: a visual hull is carved from them, projected back, and each photo
-// is cut again inside it. A view whose first cut fits the others' silhouette only once moved, or
+// is cut again inside it, and its outline moved onto the photo's colour edges (mask_outline.hpp). A view whose first cut fits the others' silhouette only once moved, or
 // whose final mask leaves out most of its own keypoints on the animal (keypoint_cover.hpp), has a
 // wrong pose and is left out.
 #include <cstdint>
