@@ -14,7 +14,7 @@ namespace nf::prepare {
 struct OutlineOptions {
   int radius = 0;        // the filter's window half-width in pixels; 0: 2.5 % of the photo's longer side (8 px at 320)
   double epsilon = 3e-5;  // regularisation, in (colour / 255)^2: how faint a colour edge the mask may follow
-  int band = 3;          // pixels either side of the cut's outline that may change
+  int band = 0;          // pixels either side of the cut's outline that may change; 0: 1 % of the longer side, at least 3
   // The least separation of the two sides' colours (their means' squared distance over their summed
   // variances, averaged over the windows) where the outline follows the filter: 0.46 is the median
   // along the automatic masks' outlines on a synth dog at 320 px (1.2 on a cat at 512), 0 where one
