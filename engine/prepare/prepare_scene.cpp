@@ -330,13 +330,13 @@ json prepare_scene(const PrepareOptions& o) {
     json floor_report = json::object();
     for (std::size_t i = 0; i < scene.cameras.size(); ++i) floor_report[scene.cameras[i].name] = {{"agreement", floor[i].share()}, {"pixels_judged", floor[i].judged()}};
     report["floor"] = {{"median_agreement", median_floor}, {"views", floor_report}};
-    const SilhouetteCheck check = check_silhouettes(scene.cameras, made, animal_box(layout));
+    const SilhouetteCheck check = check_silhouettes(scene.cameras, made, animal_box(layout), {}, &floor_refuted);
     report["silhouettes"] = check.report(scene.cameras);
     for (std::size_t i = 0; i < scene.cameras.size(); ++i) {
-      if (check.views[i].disagrees && !floor_refuted[i])
+      if (check.views[i].disagrees)
         log::warn("prepare: the mask of ", scene.cameras[i].image.filename().string(), " disagrees with the silhouette the views carve together (IoU ",
                   check.views[i].iou, " against the views' median ", check.median_iou, "); check it in previews/");
-      if (check.views[i].misplaced && !floor_refuted[i]) refuted.push_back({i, check.reason(i)});
+      if (check.views[i].misplaced) refuted.push_back({i, check.reason(i)});
     }
     std::sort(refuted.begin(), refuted.end(), [](const StrayCamera& a, const StrayCamera& b) { return a.index < b.index; });
     leave_out(refuted);

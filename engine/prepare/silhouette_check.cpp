@@ -62,16 +62,19 @@ Slide best_slide(const cv::Mat& mask, const cv::Mat& hull, double reach_share) {
 }  // namespace
 
 SilhouetteCheck check_silhouettes(const std::vector<io::Camera>& cameras, const std::vector<std::vector<std::uint8_t>>& masks,
-                                  const AnimalBox& box, const SilhouetteOptions& o) {
+                                  const AnimalBox& box, const SilhouetteOptions& o, const std::vector<char>* left_out) {
   SilhouetteCheck out;
   const std::size_t views = cameras.size();
   out.views.resize(views);
+  // A refuted view's mask (empty, or its photo's animal where its wrong pose puts it) would cost the
+  // hull a view of its tolerance, and would be named among the views that disagree.
+  for (std::size_t i = 0; i < views; ++i) out.views[i].left_out = left_out && (*left_out)[i];
   std::vector<cv::Mat> inside(views);
   for (std::size_t i = 0; i < views; ++i) inside[i] = mask_view(masks.at(i), cameras[i]);
 
   // The tolerant hull (tolerant_hull.hpp), as the automatic masks carve it.
   const HullGrid grid(box, o.cells);
-  const std::vector<char> kept = grid.carve(cameras, inside);
+  const std::vector<char> kept = grid.carve(cameras, inside, left_out);
   // A solid's outline is its surface's: only voxels with an empty 6-neighbour are drawn back.
   std::vector<glm::dvec3> surface;
   const glm::uvec3 cells = grid.cells;
@@ -90,6 +93,7 @@ SilhouetteCheck check_silhouettes(const std::vector<io::Camera>& cameras, const 
 
   parallel_for(views, [&](std::size_t i0, std::size_t i1) {
     for (std::size_t i = i0; i < i1; ++i) {
+      if (out.views[i].left_out) continue;
       // Discs as wide as a voxel, rounded, not raised: a pixel more all round fattens thin legs
       // against the mask compared.
       const cv::Mat hull = draw_voxels(cameras[i], surface, grid.side, 0.7, DiscRadius::rounded);
@@ -98,7 +102,8 @@ SilhouetteCheck check_silhouettes(const std::vector<io::Camera>& cameras, const 
     }
   });
   std::vector<double> ious;
-  for (const ViewSilhouette& v : out.views) ious.push_back(v.iou);
+  for (const ViewSilhouette& v : out.views)
+    if (!v.left_out) ious.push_back(v.iou);
   out.median_iou = nf::median(ious);
   // Well below the others' agreement (a drawn-back hull is a little fat, so views are judged
   // against their median): a wrong pose when a slide brings the mask back within the others'
@@ -107,7 +112,7 @@ SilhouetteCheck check_silhouettes(const std::vector<io::Camera>& cameras, const 
   const double low = out.median_iou - std::max(0.1, 0.2 * out.median_iou);
   for (std::size_t i = 0; i < views; ++i) {
     ViewSilhouette& v = out.views[i];
-    if (v.iou >= low) continue;
+    if (v.left_out || v.iou >= low) continue;
     const double least_slide = o.min_shift * double(std::max(cameras[i].width, cameras[i].height));
     v.misplaced = v.shifted_iou >= low && v.shifted_iou >= v.iou + 0.15 && v.shift_px >= least_slide;
     v.disagrees = !v.misplaced;
@@ -130,7 +135,8 @@ json SilhouetteCheck::report(const std::vector<io::Camera>& cameras) const {
   json per_view = json::object();
   for (std::size_t i = 0; i < views.size(); ++i) {
     const ViewSilhouette& v = views[i];
-    per_view[cameras.at(i).image.filename().string()] = {{"iou", v.iou}, {"slid_iou", v.shifted_iou}, {"slide_px", v.shift_px}};
+    per_view[cameras.at(i).image.filename().string()] =
+        v.left_out ? json{{"left_out", true}} : json{{"iou", v.iou}, {"slid_iou", v.shifted_iou}, {"slide_px", v.shift_px}};
   }
   json misplaced = json::array(), disagreeing = json::array();
   for (std::size_t i = 0; i < views.size(); ++i) {

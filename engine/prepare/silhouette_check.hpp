@@ -33,6 +33,7 @@ struct ViewSilhouette {
   double shift_px = 0;     // the slide that gives it, in photo pixels
   bool misplaced = false;  // the mask fits the hull once moved: the pose is wrong
   bool disagrees = false;  // it fits nowhere: the mask or the photo is to be checked
+  bool left_out = false;   // refuted before (by the floor): no part in the hull, not judged
 };
 
 struct SilhouetteCheck {
@@ -45,7 +46,8 @@ struct SilhouetteCheck {
 };
 
 // `masks`: per camera, width x height, non-zero where the animal is. `box` bounds the animal.
+// `left_out` (when given): views whose pose is already refuted; they neither carve nor are judged.
 SilhouetteCheck check_silhouettes(const std::vector<io::Camera>& cameras, const std::vector<std::vector<std::uint8_t>>& masks,
-                                  const AnimalBox& box, const SilhouetteOptions& options = {});
+                                  const AnimalBox& box, const SilhouetteOptions& options = {}, const std::vector<char>* left_out = nullptr);
 
 }  // namespace nf::prepare

@@ -248,7 +248,8 @@ TEST_CASE("prepare places every photo of a textured synth scene near the true ca
   // runs get wrong: once 2.8 radii off); the poses kept are checked against the truth below.
   const json& silhouettes = report["silhouettes"];
   double worst_silhouette = 1;
-  for (const auto& [name, view] : silhouettes["views"].items()) worst_silhouette = std::min(worst_silhouette, view["iou"].get<double>());
+  for (const auto& [name, view] : silhouettes["views"].items())
+    if (!view.contains("left_out")) worst_silhouette = std::min(worst_silhouette, view["iou"].get<double>());
   MESSAGE("silhouettes: median IoU ", silhouettes["median_iou"].get<double>(), ", worst ", worst_silhouette, "; left out: ", report["stray_cameras"].dump());
   // A pose left out was wrong: COLMAP's own pose of it lies well off the truth (seen: 011 at 0.93
   // radii and 4.7 degrees, refuted by the floor, whose silhouette IoU 0.17 no slide explained).

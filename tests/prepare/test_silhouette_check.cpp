@@ -119,6 +119,32 @@ TEST_CASE("silhouette check: a pose moved or turned is found, a wrong mask is to
   CHECK(report["disagreeing"] == json::array({cameras[19].image.filename().string()}));
 }
 
+TEST_CASE("silhouette check: views refuted before (empty masks) neither carve the hull nor are judged") {
+  // Five views' poses refuted by the floor, their masks empty (the automatic masks cut them
+  // nowhere): taking part, each would cost the hull a view of its tolerance of a fifth, and be named.
+  const Scene& s = scene();
+  std::vector<std::vector<std::uint8_t>> masks = s.masks;
+  std::vector<char> left_out(masks.size(), 0);
+  for (std::size_t i : {std::size_t(2), std::size_t(7), std::size_t(11), std::size_t(16), std::size_t(21)}) {
+    std::fill(masks[i].begin(), masks[i].end(), 0);
+    left_out[i] = 1;
+  }
+  const prepare::SilhouetteCheck taking_part = prepare::check_silhouettes(s.scene.cameras, masks, s.box);
+  const prepare::SilhouetteCheck check = prepare::check_silhouettes(s.scene.cameras, masks, s.box, {}, &left_out);
+  MESSAGE("hull voxels: ", check.hull_voxels, " with the refuted views left out, ", taking_part.hull_voxels, " with their empty masks carving");
+  CHECK(check.hull_voxels > taking_part.hull_voxels);
+  std::size_t flagged = 0;
+  for (std::size_t i = 0; i < masks.size(); ++i) {
+    CHECK(check.views[i].left_out == bool(left_out[i]));
+    flagged += check.views[i].misplaced || check.views[i].disagrees;
+  }
+  CHECK(flagged == 0);
+  CHECK(check.median_iou > 0.75);
+  const json report = check.report(s.scene.cameras);
+  CHECK(report["disagreeing"].empty());
+  CHECK(report["views"][s.scene.cameras[7].image.filename().string()]["left_out"] == true);
+}
+
 TEST_CASE("silhouette check: a mask of another size than its photo is named") {
   const Scene& s = scene();
   std::vector<std::vector<std::uint8_t>> masks = s.masks;
