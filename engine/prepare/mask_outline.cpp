@@ -18,14 +18,14 @@ cv::Mat window_mean(const cv::Mat& m, int radius) {
   return out;
 }
 
-// The colour guided filter of mask `p` (CV_32F, 0-1) by guide `colour` (three CV_32F planes, 0-1):
-// in each window, p ~ a . colour + b by least squares with a ridge of `epsilon` on a; each pixel
-// averages the fits of the windows that hold it.
 struct Filtered {
   cv::Mat mask;        // the filtered mask, CV_32F
   cv::Mat separation;  // per pixel, the mean over the windows holding it of how far apart the two sides' colours lie
 };
 
+// The colour guided filter of mask `p` (CV_32F, 0-1) by guide `colour` (three CV_32F planes, 0-1):
+// in each window, p ~ a . colour + b by least squares with a ridge of `epsilon` on a; each pixel
+// averages the fits of the windows that hold it.
 Filtered guided_filter(const std::array<cv::Mat, 3>& colour, const cv::Mat& p, int radius, double epsilon) {
   std::array<cv::Mat, 3> mean_i, cov_ip;
   const cv::Mat mean_p = window_mean(p, radius);
@@ -55,9 +55,9 @@ Filtered guided_filter(const std::array<cv::Mat, 3>& colour, const cv::Mat& p, i
     }
   cv::Mat q = window_mean(offset, radius);
   for (int c = 0; c < 3; ++c) q += window_mean(coef[c], radius).mul(colour[c]);
-  // How well a window's colours tell its two sides apart: the squared distance between the mean
-  // colours inside and outside the mask over their summed variances (Fisher's ratio). Where the
-  // animal wears the floor's colours it is about 0, and the fit follows chance texture instead.
+  // How well a window's colours tell the cut's two sides apart: the squared distance between the
+  // mean colours inside and outside the mask over their summed variances (Fisher's ratio). Where
+  // one flat colour spans both sides it is 0, and the fit would only round the outline off.
   cv::Mat separation(p.size(), CV_32F, cv::Scalar(0));
   std::array<cv::Mat, 3> sum_in;
   cv::Mat square = cv::Mat::zeros(p.size(), CV_32F), square_in = cv::Mat::zeros(p.size(), CV_32F);

@@ -1,12 +1,13 @@
 #pragma once
 // A segmentation's outline moved onto the photo's own edges. GrabCut's smoothness term cuts a
-// pixel or two off the true outline, inwards across a tuft and outwards across a gap (on synth
-// scenes almost every wrong pixel of the automatic masks lies within two of the true outline, half
-// on either side). A guided filter (He, Sun and Tang 2010) fits the mask, window by window, as a
-// linear function of the photo's colour: where the animal's colours differ from the background's
-// beside it, the filtered mask follows the colour edge, and thresholded at one half it is a mask
-// again. Where a window's colours do not tell the two sides apart the cut stands. Only pixels near the cut's outline may change: the filter's windows reach further, and a
-// patch of the animal that shares the background's colours away from its outline stays as cut.
+// pixel or two off the true outline, inwards across a tuft and outwards across a gap (on a synth
+// dog at 320 px, 84 % of the automatic masks' wrong pixels lay within two of the true outline,
+// about as many on either side). A guided filter (He, Sun and Tang 2010) fits the mask, window by
+// window, as a linear function of the photo's colour: where the animal's colours differ from the
+// background's beside it, the filtered mask follows the colour edge, and thresholded at one half
+// it is a mask again. Where a window's colours do not tell the two sides apart the cut stands.
+// Only pixels near the cut's outline may change: the filter's windows reach further, and a patch
+// of the animal that shares the background's colours away from its outline stays as cut.
 #include <opencv2/core.hpp>
 
 namespace nf::prepare {

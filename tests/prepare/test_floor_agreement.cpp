@@ -77,9 +77,13 @@ struct Ring {
     for (const io::Camera& c : cameras) grey.push_back(photograph(c, textured));
   }
   prepare::FloorAgreement view_agreement(std::size_t i, const std::vector<char>* left_out = nullptr, double slack_deg = 0) const {
-    const double slack_px = cameras[i].fx * std::tan(glm::radians(slack_deg));
-    const cv::Mat e = prepare::floor_evidence(cameras, grey, i, floor, glm::dvec3(0.0), 2 * kFramed, cv::Rect(0, 0, int(kSize), int(kSize)), 1, left_out, slack_px);
-    return {std::size_t(cv::countNonZero(e == prepare::kFloor)), std::size_t(cv::countNonZero(e == prepare::kOffFloor)), std::size_t(kSize) * kSize};
+    const auto agreement_at = [&](glm::dvec2 shift, int stride) -> prepare::FloorAgreement {
+      const cv::Mat e = prepare::floor_evidence(cameras, grey, i, floor, glm::dvec3(0.0), 2 * kFramed, cv::Rect(0, 0, int(kSize), int(kSize)), stride, left_out, shift);
+      const std::size_t block = std::size_t(stride) * std::size_t(stride);
+      return {block * std::size_t(cv::countNonZero(e == prepare::kFloor)), block * std::size_t(cv::countNonZero(e == prepare::kOffFloor)), std::size_t(kSize) * kSize};
+    };
+    if (slack_deg <= 0) return agreement_at(glm::dvec2(0.0), 1);
+    return prepare::best_shifted_agreement(agreement_at, cameras[i].fx * std::tan(glm::radians(slack_deg)), 1);
   }
   std::vector<prepare::FloorAgreement> agreement(const std::vector<char>* left_out = nullptr) const {
     std::vector<prepare::FloorAgreement> a(cameras.size());
@@ -135,11 +139,15 @@ TEST_CASE("floor agreement: through the right poses the floor matches; a pose tu
     CHECK(refuted[0].reason.find("matches the other photos' floor at") != std::string::npos);
     CHECK(refuted[0].reason.find("with a degree's slack") != std::string::npos);
     CHECK(refuted[0].reason.find("its pose is wrong") != std::string::npos);
+    // The slack is one shift for the whole photo, so no shift makes a wrong pose's floor agree:
+    // the best shift of each patch on its own let such a pose agree at 28-30 % on synth floors.
+    CHECK(turned.view_agreement(3, nullptr, prepare::kFloorSlackDeg).share() < 0.05);  // measured 0.009
   }
-  // How small a turn round the ring it sees (measured: 1 degree 0.87 agree, 2 degrees 0.56, 5
-  // degrees 0.03).
-  CHECK(prepare::floor_refuted_views(turned_by(5)) == std::vector<std::size_t>{3});
-  CHECK(prepare::floor_refuted_views(turned_by(1)).empty());
+  // How small a turn round the ring it sees.
+  const std::vector<prepare::FloorAgreement> by5 = turned_by(5), by2 = turned_by(2), by1 = turned_by(1);
+  MESSAGE("turned 5, 2, 1 degrees: ", by5[3].share(), ", ", by2[3].share(), ", ", by1[3].share(), " agree");
+  CHECK(prepare::floor_refuted_views(by5) == std::vector<std::size_t>{3});
+  CHECK(prepare::floor_refuted_views(by1).empty());
 
   // A pose panned 0.75 degrees on the spot (as COLMAP's right poses may be at small sizes: a
   // 3-pixel shift) can look refuted to the strict check on a fine floor, but a degree's slack
@@ -149,8 +157,8 @@ TEST_CASE("floor agreement: through the right poses the floor matches; a pose tu
   const std::vector<prepare::FloorAgreement> pan = panned.agreement();
   const prepare::FloorAgreement pan_slack = panned.view_agreement(3, nullptr, prepare::kFloorSlackDeg);
   MESSAGE("panned 0.75 degrees: ", pan[3].share(), " agree, ", pan_slack.share(), " with a degree's slack");
-  CHECK(pan[3].share() < median / 3);  // a candidate to the strict check (measured 0.17)
-  CHECK(pan_slack.share() > 0.5 * median);  // measured 0.62
+  CHECK(pan[3].share() < median / 3);  // a candidate to the strict check (measured 0.25)
+  CHECK(pan_slack.share() > 0.8 * median);  // measured 0.94
   CHECK(panned.refute().empty());
 
   // A photo 1.5 times brighter (its sky and highlights clipped): the patches still correlate.
