@@ -130,11 +130,18 @@ FloorAgreement best_shifted_agreement(const std::function<FloorAgreement(glm::dv
   std::vector<glm::dvec2> shifts;
   for (int sy = -kSteps; sy <= kSteps; ++sy)
     for (int sx = -kSteps; sx <= kSteps; ++sx) shifts.push_back(step * glm::dvec2(sx, sy));
-  std::vector<double> share(shifts.size(), 0.0);
+  std::vector<FloorAgreement> found(shifts.size());
   parallel_for(shifts.size(), [&](std::size_t k0, std::size_t k1) {
-    for (std::size_t k = k0; k < k1; ++k) share[k] = agreement_at(shifts[k], 2 * stride).share();
+    for (std::size_t k = k0; k < k1; ++k) found[k] = agreement_at(shifts[k], 2 * stride);
   });
-  const std::size_t best = std::size_t(std::max_element(share.begin(), share.end()) - share.begin());
+  // A shift that judges few pixels (its rays moved off the floor's textured part) says little: the
+  // best is taken among those judging at least half the shifts' median.
+  std::vector<double> judged;
+  for (const FloorAgreement& f : found) judged.push_back(double(f.judged()));
+  const double enough = 0.5 * nf::median(judged);
+  std::size_t best = shifts.size() / 2;  // no shift
+  for (std::size_t k = 0; k < found.size(); ++k)
+    if (double(found[k].judged()) >= enough && found[k].share() > found[best].share()) best = k;
   return agreement_at(shifts[best], stride);
 }
 

@@ -88,8 +88,9 @@ constexpr double kFloorSlackDeg = 1.0;
 FloorAgreement view_floor_agreement(const std::vector<io::Camera>& cameras, const std::vector<cv::Mat>& grey, const SceneLayout& layout, std::size_t view,
                                     const std::vector<char>* left_out, double slack_deg);
 // The best agreement `agreement_at(shift, stride)` gives over a 9 x 9 grid of shifts within
-// +-`slack_px` (searched at twice `stride`, the best one counted again at `stride`); `agreement_at`
-// may be called from several threads at once.
+// +-`slack_px` (searched at twice `stride`, among shifts judging at least half the shifts' median
+// of pixels; the best one counted again at `stride`); `agreement_at` may be called from several
+// threads at once.
 FloorAgreement best_shifted_agreement(const std::function<FloorAgreement(glm::dvec2, int)>& agreement_at, double slack_px, int stride);
 
 // The views' photos as floor_evidence reads them (grey levels, CV_32F).
