@@ -130,7 +130,6 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   std::vector<char> left_out(views, 0);  // misplaced views: no part in the hull
   std::vector<cv::Mat> hull_masks(views);
   std::vector<cv::Mat> grey(views);
-  std::vector<int> floor_pixels(views, 0), off_floor_pixels(views, 0);
   std::vector<cv::Mat> floor_evidences(views);
   parallel_for(views, [&](std::size_t i0, std::size_t i1) {
     for (std::size_t i = i0; i < i1; ++i) {
@@ -235,10 +234,8 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   // their floor agreed less (a turned view's neighbour fell from 0.9 to 0.37, its mask to 0.87).
   std::vector<FloorAgreement> floor_agreement(views);
   const auto find_floor = [&](std::size_t i) {
-    const io::Camera& c = scene.cameras[i];
     floor_evidences[i] = floor_evidence_round_animal(scene.cameras, grey, layout, i, 1, &left_out);
-    floor_pixels[i] = cv::countNonZero(floor_evidences[i] == kFloor), off_floor_pixels[i] = cv::countNonZero(floor_evidences[i] == kOffFloor);
-    floor_agreement[i] = {std::size_t(floor_pixels[i]), std::size_t(off_floor_pixels[i]), std::size_t(c.width) * c.height};
+    floor_agreement[i] = agreement_of(floor_evidences[i]);
   };
   if (has_floor) {
     const auto find_all = [&] {
@@ -336,7 +333,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   for (std::size_t i = 0; i < views; ++i) {
     const io::Camera& c = scene.cameras[i];
     per_view.push_back({{"view", c.name}, {"animal_share", double(cv::countNonZero(cut[i])) / double(cut[i].total())}, {"hull_iou", agreement[i]},
-                        {"outline_moved_pixels", outline_moved[i]}, {"floor_pixels", floor_pixels[i]}, {"off_floor_pixels", off_floor_pixels[i]}, {"floor_agreement", floor_agreement[i].share()},
+                        {"outline_moved_pixels", outline_moved[i]}, {"floor_pixels", floor_agreement[i].floor}, {"off_floor_pixels", floor_agreement[i].off_floor}, {"floor_agreement", floor_agreement[i].share()},
                         {"animal_keypoints", covers[i].seen}, {"animal_keypoints_inside", covers[i].inside},
                         {"background_keypoints_inside", covers[i].background_inside}, {"background_keypoints_expected", covers[i].background_expected},
                         {"left_out", left_out[i] != 0}});

@@ -125,6 +125,12 @@ cv::Mat floor_evidence_round_animal(const std::vector<io::Camera>& cameras, cons
   return floor_evidence(cameras, grey, view, layout.floor, box.base, floor_reach(box), floor_region(cameras[view], box), stride, left_out, shift);
 }
 
+FloorAgreement agreement_of(const cv::Mat& evidence, int stride) {
+  // Every stride-th pixel and row: counted with its stride squared, as if each stood for its block.
+  const std::size_t block = std::size_t(stride) * std::size_t(stride);
+  return {block * std::size_t(cv::countNonZero(evidence == kFloor)), block * std::size_t(cv::countNonZero(evidence == kOffFloor)), evidence.total()};
+}
+
 FloorAgreement best_shifted_agreement(const std::function<FloorAgreement(glm::dvec2, int)>& agreement_at, double slack_px, int stride) {
   constexpr int kSteps = 4;  // each way: a 9 x 9 grid
   const double step = slack_px / kSteps;
@@ -158,11 +164,8 @@ FloorAgreement view_floor_agreement(const std::vector<io::Camera>& cameras, cons
                                     const std::vector<char>* left_out, double slack_deg) {
   const io::Camera& c = cameras[view];
   if (!layout.has_floor) return {0, 0, std::size_t(c.width) * c.height};
-  // Every stride-th pixel and row: counted with its stride squared, as if each stood for its block.
-  const auto agreement_at = [&](glm::dvec2 shift, int stride) -> FloorAgreement {
-    const cv::Mat e = floor_evidence_round_animal(cameras, grey, layout, view, stride, left_out, shift);
-    const std::size_t block = std::size_t(stride) * std::size_t(stride);
-    return {block * std::size_t(cv::countNonZero(e == kFloor)), block * std::size_t(cv::countNonZero(e == kOffFloor)), std::size_t(c.width) * c.height};
+  const auto agreement_at = [&](glm::dvec2 shift, int stride) {
+    return agreement_of(floor_evidence_round_animal(cameras, grey, layout, view, stride, left_out, shift), stride);
   };
   const int stride = std::max(1, int(std::max(c.width, c.height) / 320));
   if (slack_deg <= 0) return agreement_at(glm::dvec2(0.0), stride);

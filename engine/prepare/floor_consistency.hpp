@@ -53,6 +53,10 @@ struct FloorAgreement {
   double share() const { return judged() ? double(floor) / double(judged()) : 0.0; }
 };
 
+// The counts of a view's floor evidence (floor_evidence at `stride`: each pixel judged stands for
+// its stride x stride block).
+FloorAgreement agreement_of(const cv::Mat& evidence, int stride = 1);
+
 // The views whose floor refutes their pose, ascending: at least 1 % of the photo judged, and an
 // agreeing share under a third of the judged views' median, where that median is at least a half
 // (in most views the floor is textured, still and flat enough to judge by). None otherwise.

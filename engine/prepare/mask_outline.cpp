@@ -27,16 +27,22 @@ struct Filtered {
 // in each window, p ~ a . colour + b by least squares with a ridge of `epsilon` on a; each pixel
 // averages the fits of the windows that hold it.
 Filtered guided_filter(const std::array<cv::Mat, 3>& colour, const cv::Mat& p, int radius, double epsilon) {
-  std::array<cv::Mat, 3> mean_i, cov_ip;
+  std::array<cv::Mat, 3> mean_i, mean_ip, cov_ip;  // mean_ip: the window's mean of colour times mask
   const cv::Mat mean_p = window_mean(p, radius);
   for (int c = 0; c < 3; ++c) {
     mean_i[c] = window_mean(colour[c], radius);
-    cov_ip[c] = window_mean(colour[c].mul(p), radius) - mean_i[c].mul(mean_p);
+    mean_ip[c] = window_mean(colour[c].mul(p), radius);
+    cov_ip[c] = mean_ip[c] - mean_i[c].mul(mean_p);
   }
   // The colours' 3x3 covariance per window: its six distinct entries.
   cv::Mat var[3][3];
+  cv::Mat square = cv::Mat::zeros(p.size(), CV_32F);  // the window's mean squared colour (summed over channels)
   for (int a = 0; a < 3; ++a)
-    for (int b = a; b < 3; ++b) var[a][b] = window_mean(colour[a].mul(colour[b]), radius) - mean_i[a].mul(mean_i[b]);
+    for (int b = a; b < 3; ++b) {
+      const cv::Mat mean_ab = window_mean(colour[a].mul(colour[b]), radius);
+      if (a == b) square += mean_ab;
+      var[a][b] = mean_ab - mean_i[a].mul(mean_i[b]);
+    }
   std::array<cv::Mat, 3> coef;
   for (cv::Mat& c : coef) c = cv::Mat(p.size(), CV_32F);
   cv::Mat offset(p.size(), CV_32F);
@@ -59,20 +65,15 @@ Filtered guided_filter(const std::array<cv::Mat, 3>& colour, const cv::Mat& p, i
   // mean colours inside and outside the mask over their summed variances (Fisher's ratio). Where
   // one flat colour spans both sides it is 0, and the fit would only round the outline off.
   cv::Mat separation(p.size(), CV_32F, cv::Scalar(0));
-  std::array<cv::Mat, 3> sum_in;
-  cv::Mat square = cv::Mat::zeros(p.size(), CV_32F), square_in = cv::Mat::zeros(p.size(), CV_32F);
-  for (int c = 0; c < 3; ++c) {
-    sum_in[c] = window_mean(colour[c].mul(p), radius);
-    const cv::Mat sq = colour[c].mul(colour[c]);
-    square += window_mean(sq, radius), square_in += window_mean(sq.mul(p), radius);
-  }
+  cv::Mat square_in = cv::Mat::zeros(p.size(), CV_32F);
+  for (int c = 0; c < 3; ++c) square_in += window_mean(colour[c].mul(colour[c]).mul(p), radius);
   for (int y = 0; y < p.rows; ++y)
     for (int x = 0; x < p.cols; ++x) {
       const double in = mean_p.at<float>(y, x), out = 1 - in;
       if (in < 0.02 || out < 0.02) continue;  // a window all on one side separates nothing
       double distance = 0, spread_in = square_in.at<float>(y, x) / in, spread_out = (square.at<float>(y, x) - square_in.at<float>(y, x)) / out;
       for (int c = 0; c < 3; ++c) {
-        const double m_in = sum_in[c].at<float>(y, x) / in, m_out = (mean_i[c].at<float>(y, x) - sum_in[c].at<float>(y, x)) / out;
+        const double m_in = mean_ip[c].at<float>(y, x) / in, m_out = (mean_i[c].at<float>(y, x) - mean_ip[c].at<float>(y, x)) / out;
         distance += (m_in - m_out) * (m_in - m_out), spread_in -= m_in * m_in, spread_out -= m_out * m_out;
       }
       separation.at<float>(y, x) = float(distance / (std::max(0.0, spread_in) + std::max(0.0, spread_out) + 1e-4));

@@ -77,10 +77,9 @@ struct Ring {
     for (const io::Camera& c : cameras) grey.push_back(photograph(c, textured));
   }
   prepare::FloorAgreement view_agreement(std::size_t i, const std::vector<char>* left_out = nullptr, double slack_deg = 0) const {
-    const auto agreement_at = [&](glm::dvec2 shift, int stride) -> prepare::FloorAgreement {
-      const cv::Mat e = prepare::floor_evidence(cameras, grey, i, floor, glm::dvec3(0.0), 2 * kFramed, cv::Rect(0, 0, int(kSize), int(kSize)), stride, left_out, shift);
-      const std::size_t block = std::size_t(stride) * std::size_t(stride);
-      return {block * std::size_t(cv::countNonZero(e == prepare::kFloor)), block * std::size_t(cv::countNonZero(e == prepare::kOffFloor)), std::size_t(kSize) * kSize};
+    const auto agreement_at = [&](glm::dvec2 shift, int stride) {
+      return prepare::agreement_of(
+          prepare::floor_evidence(cameras, grey, i, floor, glm::dvec3(0.0), 2 * kFramed, cv::Rect(0, 0, int(kSize), int(kSize)), stride, left_out, shift), stride);
     };
     if (slack_deg <= 0) return agreement_at(glm::dvec2(0.0), 1);
     return prepare::best_shifted_agreement(agreement_at, cameras[i].fx * std::tan(glm::radians(slack_deg)), 1);
