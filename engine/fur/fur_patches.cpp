@@ -183,7 +183,7 @@ FurView FurPatches::cut(std::uint32_t view, const PatchPlace& p) const {
            "fur patches: a patch outside its view");
   FurView v;
   v.camera = s.camera;
-  v.crop = scaled_crop(s.crop, 1, 1, p.x0, p.y0, p.width, p.height);
+  v.crop = io::scaled_crop(s.crop, 1, 1, p.x0, p.y0, p.width, p.height);
   v.scale = 1;
   v.orientation_reliability = s.reliability;
   const std::uint64_t n = v.pixels();

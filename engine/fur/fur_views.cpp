@@ -28,16 +28,6 @@ orient::OrientationMap true_orientation_of(const io::Scene& scene, const io::Cam
 
 }  // namespace
 
-
-io::Camera scaled_crop(const io::Camera& camera, double sx, double sy, std::uint32_t x0, std::uint32_t y0, std::uint32_t width,
-                       std::uint32_t height) {
-  io::Camera c = camera;
-  c.fx = camera.fx * sx, c.fy = camera.fy * sy;
-  c.cx = camera.cx * sx - double(x0), c.cy = camera.cy * sy - double(y0);
-  c.width = width, c.height = height;
-  return c;
-}
-
 FurView make_fur_view(gpu::Context& gpu, const io::Scene& scene, std::uint32_t camera, const io::Image* nonbald,
                       const geometry::Mesh& bald, const FurViewOptions& options, NativeTargets* native) {
   const io::Camera& cam = scene.cameras.at(camera);
@@ -74,7 +64,7 @@ FurView make_fur_view(gpu::Context& gpu, const io::Scene& scene, std::uint32_t c
 
   FurView v;
   v.camera = camera;
-  v.crop = scaled_crop(cam, sx, sy, x0, y0, x1 - x0, y1 - y0);
+  v.crop = io::scaled_crop(cam, sx, sy, x0, y0, x1 - x0, y1 - y0);
   v.scale = std::sqrt(sx * sy);
   const std::uint64_t n = v.pixels();
   v.mask.assign(n, 0.f), v.silhouette_weight.assign(n, 0.f), v.orientation_weight.assign(n, 0.f);
@@ -146,7 +136,7 @@ FurView make_fur_view(gpu::Context& gpu, const io::Scene& scene, std::uint32_t c
         [&](const io::Image& image, const std::vector<std::uint8_t>& m) { return orient::gabor_orientation(gpu, image, &m, options.gabor); },
         std::uint32_t(std::max(0, outline)), &padded_gabor);
     NativeTargets& t = *native;
-    t.crop = scaled_crop(cam, 1, 1, nx0, ny0, nx1 - nx0, ny1 - ny0);
+    t.crop = io::scaled_crop(cam, 1, 1, nx0, ny0, nx1 - nx0, ny1 - ny0);
     const std::uint64_t count = t.pixels();
     t.flags.assign(count, 0), t.angle.assign(count, 0.f), t.confidence.assign(count, 0.f), t.scale.assign(count, 0);
     for (std::uint32_t y = 0; y < t.crop.height; ++y)

@@ -80,9 +80,5 @@ struct NativeTargets {
 FurView make_fur_view(gpu::Context& gpu, const io::Scene& scene, std::uint32_t camera, const io::Image* nonbald,
                       const geometry::Mesh& bald, const FurViewOptions& options, NativeTargets* native = nullptr);
 
-// The cropped camera's projection scaled from the photo's pixel grid: (sx, sy) scale, (x0, y0) the
-// crop's corner at the new scale.
-io::Camera scaled_crop(const io::Camera& camera, double sx, double sy, std::uint32_t x0, std::uint32_t y0, std::uint32_t width,
-                       std::uint32_t height);
 
 }  // namespace nf::fur

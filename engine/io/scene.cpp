@@ -23,6 +23,22 @@ glm::dvec3 Camera::unproject(const glm::dvec2& pixel, double depth) const {
   return glm::dvec3(camera_to_world * glm::dvec4(in_camera * depth, 1.0));
 }
 
+Camera scaled_crop(const Camera& camera, double sx, double sy, std::uint32_t x0, std::uint32_t y0, std::uint32_t width, std::uint32_t height) {
+  Camera c = camera;
+  c.fx = camera.fx * sx, c.fy = camera.fy * sy;
+  c.cx = camera.cx * sx - double(x0), c.cy = camera.cy * sy - double(y0);
+  c.width = width, c.height = height;
+  return c;
+}
+
+Camera reduced_to(const Camera& camera, std::uint32_t max_side) {
+  const double s = std::min(1.0, double(max_side) / double(std::max(camera.width, camera.height)));
+  if (s >= 1.0) return camera;
+  const auto w = std::max<std::uint32_t>(1, std::uint32_t(std::lround(camera.width * s)));
+  const auto h = std::max<std::uint32_t>(1, std::uint32_t(std::lround(camera.height * s)));
+  return scaled_crop(camera, double(w) / camera.width, double(h) / camera.height, 0, 0, w, h);
+}
+
 glm::dmat4 opencv_to_opengl(const glm::dmat4& c2w) {
   glm::dmat4 flip(1.0);
   flip[1][1] = -1.0;

@@ -34,6 +34,14 @@ struct Camera {
   glm::dvec3 centre() const { return glm::dvec3(camera_to_world[3]); }
 };
 
+// The camera's projection onto its photo scaled by (sx, sy) and cropped: (x0, y0) the crop's corner
+// at the new scale, width x height its size. Pixel coordinates have their origin at the photo's
+// corner, so the principal point scales as the focal length does.
+Camera scaled_crop(const Camera& camera, double sx, double sy, std::uint32_t x0, std::uint32_t y0, std::uint32_t width, std::uint32_t height);
+// The whole photo reduced so that its longer side is at most `max_side` pixels (the camera itself
+// when it is that small already).
+Camera reduced_to(const Camera& camera, std::uint32_t max_side);
+
 struct Scene {
   std::filesystem::path root;
   std::vector<Camera> cameras;

@@ -9,7 +9,6 @@
 #include "engine/core/interrupt.hpp"
 #include "engine/core/log.hpp"
 #include "engine/core/stopwatch.hpp"
-#include "engine/fur/fur_views.hpp"
 #include "engine/fur/strand_colors.hpp"
 #include "engine/pipeline/export_page.hpp"
 #include "engine/geometry/mesh_tools.hpp"
@@ -28,10 +27,7 @@ namespace {
 
 // A camera of the scene (world) seen in the export frame, its image scaled to `max_side`.
 io::Camera camera_in_export(const io::Camera& cam, const exporter::ExportFrame& frame, int max_side) {
-  const double s = std::min(1.0, double(max_side) / double(std::max(cam.width, cam.height)));
-  const auto w = std::max<std::uint32_t>(1, std::uint32_t(std::lround(cam.width * s)));
-  const auto h = std::max<std::uint32_t>(1, std::uint32_t(std::lround(cam.height * s)));
-  io::Camera c = fur::scaled_crop(cam, double(w) / cam.width, double(h) / cam.height, 0, 0, w, h);
+  io::Camera c = io::reduced_to(cam, std::uint32_t(max_side));
   glm::dmat4 m = frame.world_to_export * cam.camera_to_world;
   for (int a = 0; a < 3; ++a) m[a] = glm::dvec4(glm::normalize(glm::dvec3(m[a])), 0.0);  // rigid again
   c.camera_to_world = m;
