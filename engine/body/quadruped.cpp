@@ -246,7 +246,7 @@ geometry::Mesh extract_surface(const Skeleton& s, float voxel) {
             d = smooth_min(d, evaluate(s.primitives[k], ends[k], at).distance, s.primitives[k].blend);
           field[(z * dims.y + y) * dims.x + x] = d;
         }
-  });
+  }, 1);
   geometry::Mesh mesh = geometry::marching_cubes(field.data(), dims, lo, glm::vec3(voxel), 0.0f);
   geometry::keep_largest_component(mesh);
   return mesh;

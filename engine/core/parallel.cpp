@@ -19,8 +19,8 @@ unsigned cpu_threads() {
   return std::max(1u, std::thread::hardware_concurrency());
 }
 
-void parallel_for(std::size_t count, const std::function<void(std::size_t, std::size_t)>& body) {
-  const std::size_t threads = std::max<std::size_t>(1, std::min<std::size_t>(cpu_threads(), count / 1024 + 1));
+void parallel_for(std::size_t count, const std::function<void(std::size_t, std::size_t)>& body, std::size_t min_per_thread) {
+  const std::size_t threads = std::max<std::size_t>(1, std::min<std::size_t>(cpu_threads(), count / std::max<std::size_t>(1, min_per_thread) + 1));
   std::vector<std::thread> pool;
   std::vector<std::exception_ptr> errors(threads);
   const std::size_t chunk = (count + threads - 1) / threads;

@@ -93,7 +93,7 @@ DefurResult defur_surface(gpu::Context& gpu, const geometry::Mesh& labelled, con
           const int m = b.x >= b.y && b.x >= b.z ? 0 : b.y >= b.z ? 1 : 2;
           if (sdf.distance[n] < 0) nearest_region[n] = std::uint8_t(outer.regions[v[m]]);
         }
-  });
+  }, 1);
   std::array<double, body::kRegionCount> depth{}, region_thickness{};
   std::array<bool, body::kRegionCount> present{};
   for (std::size_t v = 0; v < outer.vertex_count(); ++v) {

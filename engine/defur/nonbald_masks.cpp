@@ -41,7 +41,7 @@ std::vector<io::Image> nonbald_masks(gpu::Context& gpu, const geometry::Mesh& la
           const std::uint32_t v = index.nearest(q).first;
           if (knowledge.grows_fur(body::Region(labelled.regions[v]))) mask.pixels[y * cam.width + x] = 1.f, ++fur[y];
         }
-    });
+    }, 1);
     total.pixels += std::uint64_t(cam.width) * cam.height;
     for (std::uint32_t y = 0; y < cam.height; ++y) total.animal += animal[y], total.fur += fur[y];
     masks.push_back(std::move(mask));

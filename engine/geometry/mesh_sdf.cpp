@@ -184,7 +184,7 @@ SignedDistanceGrid signed_distance_grid(const Mesh& mesh, const SdfOptions& opti
       for (std::uint32_t t : layers[k])
         for (int j = box_lo[t].y; j <= box_hi[t].y; ++j)
           for (int i = box_lo[t].x; i <= box_hi[t].x; ++i) measure(g.index(i, j, int(k)), g.position(i, j, int(k)), t);
-  });
+  }, 1);
   layers.clear();
 
   // Sweeps: each sample tries its line neighbours' closest triangles, forwards then backwards,
@@ -228,7 +228,7 @@ SignedDistanceGrid signed_distance_grid(const Mesh& mesh, const SdfOptions& opti
           }
           out.distance[s] = in ? -d : d;
         }
-  });
+  }, 1);
   return out;
 }
 

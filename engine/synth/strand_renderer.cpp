@@ -256,7 +256,7 @@ Rendered StrandRenderer::render(const io::Camera& camera) const {
           out.orientation.pixels[2 * std::size_t(pixel) + 1] = float(glm::length(doubled) * inv);
         }
       }
-  });
+  }, 1);  // a row of a few hundred pixels, each traced s x s times
   return out;
 }
 
