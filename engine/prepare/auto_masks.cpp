@@ -39,6 +39,11 @@ void graph_cut(const cv::Mat& photo, cv::Mat& labels, std::uint32_t iterations, 
   if (cv::countNonZero(foreground(labels)) == 0) return;
   if (cv::countNonZero(foreground(labels)) == int(labels.total())) labels.setTo(cv::Scalar(cv::GC_PR_BGD));
   try {
+    // Its colour models start from k-means on OpenCV's per-thread random numbers: seeded from the
+    // view, a cut is the same whichever core makes it, and in whatever order.
+    std::uint64_t seed = 0x9E3779B97F4A7C15ULL;
+    for (const char ch : view) seed = (seed ^ std::uint8_t(ch)) * 0x100000001B3ULL;
+    cv::theRNG().state = seed | 1;
     cv::Mat bgd, fgd;
     cv::grabCut(photo, labels, cv::Rect(), bgd, fgd, int(iterations), cv::GC_INIT_WITH_MASK);
   } catch (const cv::Exception& e) {
@@ -112,6 +117,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   report["focus"] = {focus.x, focus.y, focus.z};
   report["camera_distance"] = reach;
   report["floor_found"] = has_floor;
+  report["working_side"] = o.working_side;
   report["floor_points"] = layout.floor_points;
   report["animal_points"] = animal_points.size();
   // The points bound the animal's box and seed its likely pixels; with a floor, the floor's evidence
@@ -126,19 +132,22 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   const std::vector<glm::dvec3> corners = extent.corners();
 
   const std::size_t views = scene.cameras.size();
+  // Everything up to the final outlines works on reduced copies of the photos (AutoMaskOptions).
+  std::vector<io::Camera> cameras;
+  for (const io::Camera& c : scene.cameras) cameras.push_back(io::reduced_to(c, o.working_side));
   std::vector<cv::Mat> photos(views), labels(views), cut(views);
   std::vector<char> left_out(views, 0);  // misplaced views: no part in the hull
   std::vector<cv::Mat> hull_masks(views);
   std::vector<cv::Mat> grey(views);
   std::vector<cv::Mat> floor_evidences(views);
-  parallel_for(views, [&](std::size_t i0, std::size_t i1) {
-    for (std::size_t i = i0; i < i1; ++i) {
-      photos[i] = photo_bgr(scene.cameras[i]);
-      grey[i] = grey_levels(photos[i]);
-    }
+  // One view per core at a time (parallel_for would give a few dozen views one thread).
+  for_each_dynamic(int(views), [&](int i) {
+    photos[std::size_t(i)] = photo_bgr(cameras[std::size_t(i)]);
+    grey[std::size_t(i)] = grey_levels(photos[std::size_t(i)]);
   });
   const auto first_cut = [&](std::size_t i) {
-    const io::Camera& c = scene.cameras[i];
+    const io::Camera& c = cameras[i];
+    const double to_working = double(c.width) / double(scene.cameras[i].width);  // keypoints are found at the photo's size
     cv::Mat& l = labels[i];
     l = cv::Mat(int(c.height), int(c.width), CV_8U, cv::Scalar(cv::GC_BGD));
     std::vector<cv::Point> box = projected(c, corners), hull;
@@ -172,7 +181,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
     const auto seen = points.observed.find(c.image.filename().string());
     if (seen != points.observed.end())
       for (const Observation& ob : seen->second) {
-        const cv::Point at(int(std::lround(ob.pixel.x)), int(std::lround(ob.pixel.y)));
+        const cv::Point at(int(std::lround(ob.pixel.x * to_working)), int(std::lround(ob.pixel.y * to_working)));
         if (animal[ob.point]) cv::circle(l, at, 2, cv::Scalar(cv::GC_FGD), cv::FILLED);
         else if (background[ob.point]) cv::circle(l, at, 2, cv::Scalar(cv::GC_BGD), cv::FILLED);
       }
@@ -191,14 +200,12 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
     // The animal is one solid: a cluster of voxels apart from the one its sparse points lie in is
     // where a few views' cuts took the same patch of wall or floor, and drawn back it would hold
     // that patch in their masks.
-    const std::vector<char> animal_voxels = animal_components(grid.carve(scene.cameras, cut, &left_out), grid.cells, animal_cells);
+    const std::vector<char> animal_voxels = animal_components(grid.carve(cameras, cut, &left_out), grid.cells, animal_cells);
     std::vector<glm::dvec3> voxels;
     for (std::size_t k = 0; k < grid.total(); ++k)
       if (animal_voxels[k]) voxels.push_back(grid.centre(k));
     // Discs a little wider than a voxel, raised: the cuts grow back inside a hull that is not short of the animal.
-    parallel_for(views, [&](std::size_t i0, std::size_t i1) {
-      for (std::size_t i = i0; i < i1; ++i) hull_masks[i] = draw_voxels(scene.cameras[i], voxels, grid.side, 0.8, DiscRadius::rounded_up);
-    });
+    for_each_dynamic(int(views), [&](int i) { hull_masks[std::size_t(i)] = draw_voxels(cameras[std::size_t(i)], voxels, grid.side, 0.8, DiscRadius::rounded_up); });
     return voxels.size();
   };
   const auto hull_cut = [&](std::size_t i) {
@@ -216,16 +223,15 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
     l.setTo(cv::Scalar(cv::GC_PR_FGD), (grown & cut[i]) & (l != cv::GC_BGD) & (l != cv::GC_FGD));
     l.setTo(cv::Scalar(cv::GC_FGD), shrunk & cut[i]);
     l.setTo(cv::Scalar(cv::GC_BGD), far == 0);
-    graph_cut(photos[i], l, o.grabcut_iterations, scene.cameras[i].name);
+    graph_cut(photos[i], l, o.grabcut_iterations, cameras[i].name);
     cut[i] = foreground(l);
   };
 
   // Each photo's cut is independent of the others': one per core. Views left out (a wrong pose)
   // are not cut again.
   const auto each_view = [&](const auto& body) {
-    parallel_for(views, [&](std::size_t i0, std::size_t i1) {
-      for (std::size_t i = i0; i < i1; ++i)
-        if (!left_out[i]) body(i);
+    for_each_dynamic(int(views), [&](int i) {
+      if (!left_out[std::size_t(i)]) body(std::size_t(i));
     });
   };
   // A pose COLMAP got wrong, seen in the floor's evidence: the floor it puts round the animal is
@@ -234,7 +240,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   // their floor agreed less (a turned view's neighbour fell from 0.9 to 0.37, its mask to 0.87).
   std::vector<FloorAgreement> floor_agreement(views);
   const auto find_floor = [&](std::size_t i) {
-    floor_evidences[i] = floor_evidence_round_animal(scene.cameras, grey, layout, i, 1, &left_out);
+    floor_evidences[i] = floor_evidence_round_animal(cameras, grey, layout, i, 1, &left_out);
     floor_agreement[i] = agreement_of(floor_evidences[i]);
   };
   if (has_floor) {
@@ -243,20 +249,20 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
       each_view(find_floor);
       return floor_agreement;
     };
-    const auto with_slack = [&](std::size_t i) { return view_floor_agreement(scene.cameras, grey, layout, i, &left_out, kFloorSlackDeg); };
+    const auto with_slack = [&](std::size_t i) { return view_floor_agreement(cameras, grey, layout, i, &left_out, kFloorSlackDeg); };
     for (const FloorRefutation& r : refute_poses_by_floor(floor_agreement, left_out, find_all, with_slack)) out.misplaced.push_back({r.view, r.reason});
   }
   report["median_floor_agreement"] = median_floor_agreement(floor_agreement);
   each_view(first_cut);
   for (std::size_t i = 0; i < views; ++i)  // a view left out here is cut nowhere: an empty mask
-    if (left_out[i]) cut[i] = cv::Mat::zeros(int(scene.cameras[i].height), int(scene.cameras[i].width), CV_8U);
+    if (left_out[i]) cut[i] = cv::Mat::zeros(int(cameras[i].height), int(cameras[i].width), CV_8U);
   // Or the photo's own cut (its seeds are its keypoints, where the animal really is) meets the
   // silhouette the views carve together only when moved.
   {
     std::vector<std::vector<std::uint8_t>> first(views);
     for (std::size_t i = 0; i < views; ++i) first[i].assign(cut[i].datastart, cut[i].dataend);
-    const SilhouetteCheck check = check_silhouettes(scene.cameras, first, extent, {}, &left_out);
-    report["first_cuts"] = check.report(scene.cameras);
+    const SilhouetteCheck check = check_silhouettes(cameras, first, extent, {}, &left_out);
+    report["first_cuts"] = check.report(cameras);
     for (std::size_t i = 0; i < views; ++i)
       if (check.views[i].misplaced && !left_out[i]) left_out[i] = 1, out.misplaced.push_back({i, check.reason(i)});
   }
@@ -297,21 +303,26 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   }
   report["recut_from_hull"] = recut;
   report["replaced_by_hull"] = replaced;
-  // The cuts' outlines onto the photos' edges (mask_outline.hpp): GrabCut's smoothness term leaves
-  // them a pixel or two off, on either side.
+  // The cuts drawn back at the photos' own size, their outlines moved onto the photos' edges there
+  // (mask_outline.hpp): GrabCut's smoothness term leaves them a pixel or two off, on either side,
+  // and a reduced cut a pixel of its own size.
   std::vector<int> outline_moved(views, 0);
-  each_view([&](std::size_t i) {
-    const cv::Mat snapped = snap_outline_to_photo(photos[i], cut[i]);
-    outline_moved[i] = cv::countNonZero(snapped != cut[i]);
-    cut[i] = snapped;
-  });
   std::vector<std::vector<std::uint8_t>> masks(views);
-  for (std::size_t i = 0; i < views; ++i) {
+  each_view([&](std::size_t i) {
     const io::Camera& c = scene.cameras[i];
-    masks[i].resize(std::size_t(c.width) * c.height);
-    for (std::uint32_t y = 0; y < c.height; ++y)
-      for (std::uint32_t x = 0; x < c.width; ++x) masks[i][std::size_t(y) * c.width + x] = cut[i].at<std::uint8_t>(int(y), int(x)) ? 1 : 0;
-  }
+    const cv::Mat photo = cameras[i].width == c.width ? photos[i] : photo_bgr(c);
+    cv::Mat drawn = cut[i];
+    if (drawn.size() != photo.size()) {
+      cv::resize(cut[i], drawn, photo.size(), 0, 0, cv::INTER_LINEAR);  // a smooth outline, not the reduced pixels' steps
+      drawn = drawn >= 128;
+    }
+    const cv::Mat snapped = snap_outline_to_photo(photo, drawn);
+    outline_moved[i] = cv::countNonZero(snapped != drawn);
+    masks[i].assign(snapped.datastart, snapped.dataend);
+    for (std::uint8_t& m : masks[i]) m = m ? 1 : 0;
+  });
+  for (std::size_t i = 0; i < views; ++i)  // a view left out has an empty mask
+    if (left_out[i]) masks[i].assign(std::size_t(scene.cameras[i].width) * scene.cameras[i].height, 0);
   // The photo's own keypoints on the animal against its mask (keypoint_cover.hpp): a view whose
   // mask leaves most of them out has a pose that puts the animal elsewhere, and is left out.
   const std::vector<KeypointCover> covers = animal_keypoint_cover(scene.cameras, points, animal, background, masks);
@@ -332,7 +343,7 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   std::vector<std::string> flagged;
   for (std::size_t i = 0; i < views; ++i) {
     const io::Camera& c = scene.cameras[i];
-    per_view.push_back({{"view", c.name}, {"animal_share", double(cv::countNonZero(cut[i])) / double(cut[i].total())}, {"hull_iou", agreement[i]},
+    per_view.push_back({{"view", c.name}, {"animal_share", double(std::count(masks[i].begin(), masks[i].end(), 1)) / double(masks[i].size())}, {"hull_iou", agreement[i]},
                         {"outline_moved_pixels", outline_moved[i]}, {"floor_pixels", floor_agreement[i].floor}, {"off_floor_pixels", floor_agreement[i].off_floor}, {"floor_agreement", floor_agreement[i].share()},
                         {"animal_keypoints", covers[i].seen}, {"animal_keypoints_inside", covers[i].inside},
                         {"background_keypoints_inside", covers[i].background_inside}, {"background_keypoints_expected", covers[i].background_expected},

@@ -14,6 +14,7 @@
 
 #include "engine/core/json.hpp"
 #include "engine/io/scene.hpp"
+#include "engine/prepare/photo_mats.hpp"
 #include "engine/prepare/scene_layout.hpp"
 #include "engine/prepare/sparse_points.hpp"
 
@@ -23,6 +24,10 @@ struct AutoMaskOptions {
   std::uint32_t rounds = 2;             // cuts per photo: the first alone, then each inside the hull of the last
   std::uint32_t hull_cells = 160;       // the visual hull's voxels along the animal box's longest side
   std::uint32_t grabcut_iterations = 5;
+  // The cuts, the floor's evidence and the hull work on the photos reduced to this many pixels on
+  // their longer side; the final masks are drawn back at the photo's own size and their outlines
+  // snapped to its edges there.
+  std::uint32_t working_side = kWorkingSide;
 };
 
 struct AutoMasks {
@@ -34,7 +39,7 @@ struct AutoMasks {
   std::vector<StrayCamera> misplaced;
 };
 
-// The scene's cameras must be undistorted pinholes with their photos; `points` and `layout` from the
+// The scene's cameras must be undistorted pinholes with their photos (of any size: see working_side); `points` and `layout` from the
 // same model (scene_layout.hpp finds the centre, the floor and the animal's points).
 // Throws InputError when too few sparse points stand above the floor to say where the animal is.
 AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, const SceneLayout& layout, const AutoMaskOptions& options = {});

@@ -138,9 +138,7 @@ FloorAgreement best_shifted_agreement(const std::function<FloorAgreement(glm::dv
   for (int sy = -kSteps; sy <= kSteps; ++sy)
     for (int sx = -kSteps; sx <= kSteps; ++sx) shifts.push_back(step * glm::dvec2(sx, sy));
   std::vector<FloorAgreement> found(shifts.size());
-  parallel_for(shifts.size(), [&](std::size_t k0, std::size_t k1) {
-    for (std::size_t k = k0; k < k1; ++k) found[k] = agreement_at(shifts[k], 2 * stride);
-  });
+  for_each_dynamic(int(shifts.size()), [&](int k) { found[std::size_t(k)] = agreement_at(shifts[std::size_t(k)], 2 * stride); });
   // A shift that judges few pixels (its rays moved off the floor's textured part) says little: the
   // best is taken among those judging at least half the shifts' median.
   std::vector<double> judged;
@@ -154,9 +152,7 @@ FloorAgreement best_shifted_agreement(const std::function<FloorAgreement(glm::dv
 
 std::vector<cv::Mat> grey_photos(const std::vector<io::Camera>& cameras) {
   std::vector<cv::Mat> grey(cameras.size());
-  parallel_for(cameras.size(), [&](std::size_t i0, std::size_t i1) {
-    for (std::size_t i = i0; i < i1; ++i) grey[i] = grey_levels(photo_bgr(cameras[i]));
-  });
+  for_each_dynamic(int(cameras.size()), [&](int i) { grey[std::size_t(i)] = grey_levels(photo_bgr(cameras[std::size_t(i)])); });
   return grey;
 }
 
@@ -175,9 +171,8 @@ FloorAgreement view_floor_agreement(const std::vector<io::Camera>& cameras, cons
 std::vector<FloorAgreement> floor_agreement(const std::vector<io::Camera>& cameras, const std::vector<cv::Mat>& grey, const SceneLayout& layout,
                                             const std::vector<char>* left_out) {
   std::vector<FloorAgreement> out(cameras.size());
-  parallel_for(cameras.size(), [&](std::size_t i0, std::size_t i1) {
-    for (std::size_t i = i0; i < i1; ++i)
-      if (!(left_out && (*left_out)[i])) out[i] = view_floor_agreement(cameras, grey, layout, i, left_out, 0.0);
+  for_each_dynamic(int(cameras.size()), [&](int i) {
+    if (!(left_out && (*left_out)[std::size_t(i)])) out[std::size_t(i)] = view_floor_agreement(cameras, grey, layout, std::size_t(i), left_out, 0.0);
   });
   return out;
 }

@@ -95,21 +95,31 @@ cv::Mat snap_outline_to_photo(const cv::Mat& photo, const cv::Mat& mask, const O
   const int longer = std::max(photo.cols, photo.rows);
   const int radius = o.radius > 0 ? o.radius : std::max(2, int(std::lround(0.025 * longer)));
   const int band = o.band > 0 ? o.band : std::max(3, int(std::lround(0.01 * longer)));
+  // Only the animal's box and what the filter reads round it: a pixel the band may change depends
+  // on the photo within two windows of it (the fit's window, then the fits' mean), so the result
+  // is the whole photo's, for a fraction of the work on a photo of many megapixels.
+  const int margin = band + 2 * radius + 1;
+  const cv::Rect box = cv::boundingRect(in);
+  const cv::Rect roi = cv::Rect(box.x - margin, box.y - margin, box.width + 2 * margin, box.height + 2 * margin) & cv::Rect(0, 0, in.cols, in.rows);
   cv::Mat photo_f;
-  photo.convertTo(photo_f, CV_32FC3, 1.0 / 255.0);
+  photo(roi).convertTo(photo_f, CV_32FC3, 1.0 / 255.0);
   std::array<cv::Mat, 3> colour;
   cv::split(photo_f, colour.data());
+  const cv::Mat in_roi = in(roi);
   cv::Mat p;
-  in.convertTo(p, CV_32F, 1.0 / 255.0);
+  in_roi.convertTo(p, CV_32F, 1.0 / 255.0);
   const Filtered f = guided_filter(colour, p, radius, o.epsilon);
   const cv::Mat separated = f.separation >= float(o.min_separation);
-  const cv::Mat snapped = ((f.mask >= 0.5f) & separated) | (in & ~separated);
+  const cv::Mat snapped = ((f.mask >= 0.5f) & separated) | (in_roi & ~separated);
   // Only the band round the cut's outline follows the filter.
   const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3));
   cv::Mat grown, shrunk;
-  cv::dilate(in, grown, kernel, cv::Point(-1, -1), band);
-  cv::erode(in, shrunk, kernel, cv::Point(-1, -1), band, cv::BORDER_CONSTANT, cv::Scalar(255));
-  return (snapped & grown) | shrunk;
+  cv::dilate(in_roi, grown, kernel, cv::Point(-1, -1), band);
+  cv::erode(in_roi, shrunk, kernel, cv::Point(-1, -1), band, cv::BORDER_CONSTANT, cv::Scalar(255));
+  cv::Mat out = cv::Mat::zeros(in.size(), CV_8U), out_roi = out(roi);
+  const cv::Mat refined = (snapped & grown) | shrunk;
+  refined.copyTo(out_roi);
+  return out;
 }
 
 }  // namespace nf::prepare

@@ -8,6 +8,8 @@
 #include <map>
 #include <sstream>
 
+#include <opencv2/imgproc.hpp>
+
 #include "engine/core/atomic_file.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/log.hpp"
@@ -20,6 +22,7 @@
 #include "engine/prepare/colmap_models.hpp"
 #include "engine/prepare/floor_consistency.hpp"
 #include "engine/prepare/known_distance.hpp"
+#include "engine/prepare/photo_mats.hpp"
 #include "engine/prepare/scene_layout.hpp"
 #include "engine/prepare/silhouette_check.hpp"
 #include "engine/prepare/sparse_points.hpp"
@@ -81,15 +84,25 @@ class Steps {
 };
 
 // The photo with its mask's outline in red, to check a mask at a glance.
-void write_outline_preview(const fs::path& file, io::Image photo, const std::vector<std::uint8_t>& inside) {
-  const std::uint32_t w = photo.width, h = photo.height;
+void write_outline_preview(const fs::path& file, const io::Camera& camera, const std::vector<std::uint8_t>& inside) {
+  // At most kWorkingSide on the longer side: a one-pixel outline on a 12 MP photo vanishes when the
+  // preview is looked at whole.
+  const io::Camera shown = io::reduced_to(camera, kWorkingSide);
+  const cv::Mat photo = photo_bgr(shown);
+  cv::Mat mask(int(camera.height), int(camera.width), CV_8U, const_cast<std::uint8_t*>(inside.data()));
+  if (shown.width != camera.width) {
+    cv::Mat reduced;
+    cv::resize(mask * 255, reduced, photo.size(), 0, 0, cv::INTER_AREA);
+    mask = reduced >= 128;
+  }
+  const std::uint32_t w = shown.width, h = shown.height;
   io::Image rgb{w, h, 3, std::vector<float>(std::size_t(w) * h * 3)};
   for (std::uint32_t y = 0; y < h; ++y)
     for (std::uint32_t x = 0; x < w; ++x) {
-      const std::size_t k = std::size_t(y) * w + x;
-      const bool edge = (x > 0 && inside[k - 1] != inside[k]) || (y > 0 && inside[k - w] != inside[k]);
-      for (std::uint32_t c = 0; c < 3; ++c)
-        rgb.pixels[3 * k + c] = edge ? (c == 0 ? 1.f : 0.f) : photo.at(x, y, std::min(c, photo.channels - 1));
+      const bool in = mask.at<std::uint8_t>(int(y), int(x)) != 0;
+      const bool edge = (x > 0 && (mask.at<std::uint8_t>(int(y), int(x) - 1) != 0) != in) || (y > 0 && (mask.at<std::uint8_t>(int(y) - 1, int(x)) != 0) != in);
+      const cv::Vec3b& px = photo.at<cv::Vec3b>(int(y), int(x));
+      for (std::uint32_t c = 0; c < 3; ++c) rgb.pixels[3 * (std::size_t(y) * w + x) + c] = edge ? (c == 0 ? 1.f : 0.f) : float(px[2 - c]) / 255.f;
     }
   write_file_atomic(file, io::encode_jpeg(rgb, 90));
 }
@@ -138,6 +151,7 @@ json prepare_scene(const PrepareOptions& o) {
   if (from_video && !o.colmap_model.empty()) throw UsageError("prepare: --colmap goes with --images (the photos the model was made from)");
   if (from_video && !fs::is_regular_file(o.video)) throw InputError("prepare: --video " + o.video.string() + " is not a file");
   if (o.cm_per_unit && !o.known_distance.empty()) throw UsageError("prepare: --scene-scale and --known-distance both set the unit; give one");
+  const std::uint32_t working_side = o.working_side ? o.working_side : kWorkingSide;
   std::optional<KnownDistance> known;
   if (!o.known_distance.empty()) known = read_known_distance(o.known_distance);
   // The tools are found before anything runs for minutes.
@@ -301,7 +315,9 @@ json prepare_scene(const PrepareOptions& o) {
   leave_out(strays);
   // Then those whose masks refute them (silhouette_check.hpp).
   if (automatic) {
-    AutoMasks found = automatic_masks(scene, sparse, layout);
+    AutoMaskOptions mask_options;
+    mask_options.working_side = working_side;
+    AutoMasks found = automatic_masks(scene, sparse, layout, mask_options);
     made = std::move(found.masks);
     report["automatic_masks"] = std::move(found.report);
     leave_out(found.misplaced);
@@ -319,9 +335,11 @@ json prepare_scene(const PrepareOptions& o) {
     std::vector<char> floor_refuted(scene.cameras.size(), 0);
     std::vector<StrayCamera> refuted;
     if (layout.has_floor) {
-      const std::vector<cv::Mat> grey = grey_photos(scene.cameras);
-      const auto find_all = [&] { return floor_agreement(scene.cameras, grey, layout, &floor_refuted); };
-      const auto with_slack = [&](std::size_t i) { return view_floor_agreement(scene.cameras, grey, layout, i, &floor_refuted, kFloorSlackDeg); };
+      std::vector<io::Camera> reduced;  // the photos' reduced copies, as the automatic masks judge the floor
+      for (const io::Camera& c : scene.cameras) reduced.push_back(io::reduced_to(c, working_side));
+      const std::vector<cv::Mat> grey = grey_photos(reduced);
+      const auto find_all = [&] { return floor_agreement(reduced, grey, layout, &floor_refuted); };
+      const auto with_slack = [&](std::size_t i) { return view_floor_agreement(reduced, grey, layout, i, &floor_refuted, kFloorSlackDeg); };
       for (const FloorRefutation& r : refute_poses_by_floor(floor, floor_refuted, find_all, with_slack)) refuted.push_back({r.view, r.reason});
     } else {
       floor.resize(scene.cameras.size());
@@ -357,7 +375,7 @@ json prepare_scene(const PrepareOptions& o) {
     const std::vector<std::uint8_t> inside = std::move(made[i]);
     c.mask = work / "masks" / (fs::path(name).stem().string() + ".png");
     io::write_png(c.mask, io::Image{c.width, c.height, 1, std::vector<float>(inside.begin(), inside.end())});
-    write_outline_preview(work / "previews" / (fs::path(name).stem().string() + ".jpg"), io::read_image(image), inside);
+    write_outline_preview(work / "previews" / (fs::path(name).stem().string() + ".jpg"), c, inside);
   }
   std::vector<std::string> unplaced;
   for (const fs::path& p : photos)

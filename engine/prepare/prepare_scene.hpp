@@ -22,6 +22,9 @@ struct PrepareOptions {
   std::optional<double> cm_per_unit;   // the scene's unit, when the user knows it; or
   std::filesystem::path known_distance;  // two points picked in the photos and their distance (known_distance.hpp)
   std::uint32_t max_features = 4096;   // SIFT features per photo (COLMAP's matching time grows with its square)
+  // The longer side of the photos' reduced copies the masks and the floor checks work on; the
+  // masks are written at the photos' own size (auto_masks.hpp). 0: 1,024 (photo_mats.hpp).
+  std::uint32_t working_side = 0;
 };
 
 // Returns prepare.json's content. UsageError / InputError say what to do: too few photos, no masks,

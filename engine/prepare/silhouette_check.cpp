@@ -91,15 +91,14 @@ SilhouetteCheck check_silhouettes(const std::vector<io::Camera>& cameras, const 
       }
   if (out.hull_voxels == 0) return out;
 
-  parallel_for(views, [&](std::size_t i0, std::size_t i1) {
-    for (std::size_t i = i0; i < i1; ++i) {
-      if (out.views[i].left_out) continue;
-      // Discs as wide as a voxel, rounded, not raised: a pixel more all round fattens thin legs
-      // against the mask compared.
-      const cv::Mat hull = draw_voxels(cameras[i], surface, grid.side, 0.7, DiscRadius::rounded);
-      const Slide slide = best_slide(inside[i], hull, o.max_shift);
-      out.views[i].iou = slide.iou, out.views[i].shifted_iou = slide.best_iou, out.views[i].shift_px = slide.shift_px;
-    }
+  for_each_dynamic(int(views), [&](int view) {
+    const auto i = std::size_t(view);
+    if (out.views[i].left_out) return;
+    // Discs as wide as a voxel, rounded, not raised: a pixel more all round fattens thin legs
+    // against the mask compared.
+    const cv::Mat hull = draw_voxels(cameras[i], surface, grid.side, 0.7, DiscRadius::rounded);
+    const Slide slide = best_slide(inside[i], hull, o.max_shift);
+    out.views[i].iou = slide.iou, out.views[i].shifted_iou = slide.best_iou, out.views[i].shift_px = slide.shift_px;
   });
   std::vector<double> ious;
   for (const ViewSilhouette& v : out.views)

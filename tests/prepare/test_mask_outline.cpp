@@ -136,3 +136,22 @@ TEST_CASE("mask outline: an animal in the floor's colours is cut no worse; with 
   const Scene flat = make_scene(Coat::flat);
   CHECK(cv::countNonZero(prepare::snap_outline_to_photo(flat.photo, cut) != cut) == 0);
 }
+
+TEST_CASE("mask outline: the same outline whatever lies beyond the filter's reach, at any place in the photo") {
+  // Only the animal's box and two windows round it are filtered (a photo of many megapixels): the
+  // scene set into a larger photo, anything else beyond, gives the same mask at the same place.
+  const Scene s = make_scene(Coat::tan);
+  const cv::Mat cut = cut_like_grabcut(s.truth);
+  prepare::OutlineOptions o;
+  o.radius = 5, o.band = 3;  // the 200 px scene's; by default they follow the photo's size
+  const cv::Mat alone = prepare::snap_outline_to_photo(s.photo, cut, o);
+  cv::Mat photo(360, 400, CV_8UC3), mask = cv::Mat::zeros(360, 400, CV_8U);
+  cv::randu(photo, cv::Scalar::all(0), cv::Scalar::all(255));
+  const cv::Rect at(150, 110, kSize, kSize);
+  s.photo.copyTo(photo(at));
+  cut.copyTo(mask(at));
+  const cv::Mat placed = prepare::snap_outline_to_photo(photo, mask, o);
+  CHECK(cv::countNonZero(placed(at) != alone) == 0);
+  CHECK(cv::countNonZero(placed) == cv::countNonZero(alone));  // nothing outside the scene's square
+  CHECK(cv::countNonZero(alone != cut) > 0);  // the outline did move
+}

@@ -114,16 +114,14 @@ Agreement compare(const io::Scene& prepared, const io::Scene& truth, const fs::p
   return r;
 }
 
-// COLMAP model `model` as text in `out`, the data lines of its `file` (cameras.txt, images.txt)
-// split into words for `edit` to change (comments are kept as they are).
-void text_model(const fs::path& model, const fs::path& out, const std::string& file, const std::function<void(std::vector<std::vector<std::string>>&)>& edit) {
-  fs::create_directories(out);
-  prepare::run_colmap("model_converter", {"--input_path", model.string(), "--output_path", out.string(), "--output_type", "TXT"}, out.string() + ".log");
+// The data lines of text model file `file` in folder `model` (cameras.txt, images.txt) split into
+// words for `edit` to change (comments are kept as they are).
+void edit_text_model(const fs::path& model, const std::string& file, const std::function<void(std::vector<std::vector<std::string>>&)>& edit) {
   std::vector<std::string> lines;
   std::vector<std::vector<std::string>> rows;
   std::vector<std::size_t> row_line;
   {
-    std::ifstream in(out / file);
+    std::ifstream in(model / file);
     for (std::string line; std::getline(in, line);) {
       if (!line.empty() && line[0] != '#') {
         std::istringstream f(line);
@@ -140,8 +138,15 @@ void text_model(const fs::path& model, const fs::path& out, const std::string& f
     for (const std::string& w : rows[r]) joined += (joined.empty() ? "" : " ") + w;
     lines[row_line[r]] = joined;
   }
-  std::ofstream o(out / file);
+  std::ofstream o(model / file);
   for (const std::string& line : lines) o << line << "\n";
+}
+
+// COLMAP model `model` as text in `out`, its `file` edited as edit_text_model does.
+void text_model(const fs::path& model, const fs::path& out, const std::string& file, const std::function<void(std::vector<std::vector<std::string>>&)>& edit) {
+  fs::create_directories(out);
+  prepare::run_colmap("model_converter", {"--input_path", model.string(), "--output_path", out.string(), "--output_type", "TXT"}, out.string() + ".log");
+  edit_text_model(out, file, edit);
 }
 
 // Where COLMAP's model put the photos prepare left out, against the truth (the similarity fitted
@@ -354,6 +359,78 @@ TEST_CASE("prepare makes the masks itself when the photos have none, close to th
   // 8 in most) to bound more tightly than the check itself does (0.6-1 measured).
   CHECK(most_background <= 0.25);
   CHECK(fs::exists(o.out / "previews" / "000.jpg"));
+}
+
+// `image` twice its size, bilinear (pixel centres at half-integers): a photo larger than the size
+// prepare's masks work at, with the same content.
+io::Image twice_the_size(const io::Image& image) {
+  io::Image out{2 * image.width, 2 * image.height, image.channels, {}};
+  out.pixels.resize(std::size_t(out.width) * out.height * out.channels);
+  for (std::uint32_t y = 0; y < out.height; ++y)
+    for (std::uint32_t x = 0; x < out.width; ++x) {
+      const double u = std::clamp((x + 0.5) / 2 - 0.5, 0.0, image.width - 1.0), v = std::clamp((y + 0.5) / 2 - 0.5, 0.0, image.height - 1.0);
+      const auto x0 = std::uint32_t(u), y0 = std::uint32_t(v);
+      const std::uint32_t x1 = std::min(x0 + 1, image.width - 1), y1 = std::min(y0 + 1, image.height - 1);
+      const float fx = float(u - x0), fy = float(v - y0);
+      for (std::uint32_t c = 0; c < image.channels; ++c)
+        out.pixels[(std::size_t(y) * out.width + x) * out.channels + c] =
+            (1 - fy) * ((1 - fx) * image.at(x0, y0, c) + fx * image.at(x1, y0, c)) + fy * ((1 - fx) * image.at(x0, y1, c) + fx * image.at(x1, y1, c));
+    }
+  return out;
+}
+
+TEST_CASE("prepare's masks on photos larger than the size it cuts at: drawn back at the photos' own size, as close to the truth") {
+  // A phone's photos have 12 MP; the cuts, the floor's evidence and the hull work on reduced copies
+  // (1,024 px by default), and each mask is drawn back at its photo's size, its outline snapped to
+  // that photo's edges. Here the scene's photos at twice their size with a working size of the
+  // original's, and the first case's COLMAP model at twice the size (lens and keypoints).
+  const Fixture& f = fixture();
+  const double min_median = f.full ? 0.95 : 0.88, min_worst = f.full ? 0.90 : 0.65;
+  const fs::path model = f.root / "prepared" / "colmap" / "sparse" / "0", large = f.root / "large";
+  REQUIRE(fs::exists(model / "images.bin"));
+  fs::create_directories(large / "images");
+  REQUIRE(f.photo("000").ends_with(".png"));  // written again as PNG under the names the model holds
+  for (const io::Camera& c : f.truth.cameras) io::write_png(large / "images" / c.image.filename(), twice_the_size(io::read_image(c.image)));
+  const fs::path large_model = large / "model";
+  const auto doubled = [](const std::string& w) {
+    std::ostringstream s;
+    s.precision(17);
+    s << 2 * std::stod(w);
+    return s.str();
+  };
+  // images.txt: keypoint lines are (x, y, point) triples; an image's line has ten fields.
+  text_model(model, large_model, "images.txt", [&](std::vector<std::vector<std::string>>& rows) {
+    for (std::vector<std::string>& w : rows)
+      if (w.size() != 10)
+        for (std::size_t k = 0; k + 2 < w.size(); k += 3) w[k] = doubled(w[k]), w[k + 1] = doubled(w[k + 1]);
+  });
+  // cameras.txt: CAMERA_ID MODEL WIDTH HEIGHT f cx cy k (SIMPLE_RADIAL); pixel coordinates start at
+  // the photo's corner, so the principal point doubles as the focal length does.
+  edit_text_model(large_model, "cameras.txt", [&](std::vector<std::vector<std::string>>& rows) {
+    for (std::vector<std::string>& w : rows) {
+      REQUIRE(w.size() >= 7);
+      for (std::size_t k = 2; k < 7; ++k) w[k] = k < 4 ? std::to_string(2 * std::stoul(w[k])) : doubled(w[k]);
+    }
+  });
+  prepare::PrepareOptions o = f.options("automatic_large");
+  o.images = large / "images", o.colmap_model = large_model;
+  o.working_side = f.truth.cameras.front().width;
+  const json report = prepare::prepare_scene(o);
+  CHECK(report["automatic_masks"]["working_side"] == o.working_side);
+  const io::Scene prepared = io::read_scene(o.out);
+  REQUIRE(!prepared.cameras.empty());
+  prepared.check_files("prepared");  // photos and masks at twice the size
+  CHECK(prepared.cameras.front().width == 2 * f.truth.cameras.front().width);
+  CHECK(report["placed"].get<std::size_t>() + report["stray_cameras"].size() == f.truth.cameras.size());
+  CHECK(report["stray_cameras"].size() <= 1);
+  const Agreement a = compare(prepared, f.truth, f.root / "truth");
+  std::size_t snapped = 0;
+  for (const json& v : report["automatic_masks"]["views"]) snapped += v["outline_moved_pixels"].get<std::size_t>();
+  MESSAGE("automatic masks on photos twice the working size: IoU median ", a.median_iou, " worst ", a.worst_iou, " (", a.worst_iou_camera, "), ",
+          report["automatic_masks"]["seconds"].get<double>(), " s; outlines moved ", snapped, " pixels at the photos' size; left out ", report["stray_cameras"].dump());
+  CHECK(a.median_iou >= min_median);
+  CHECK(a.worst_iou >= min_worst);
+  CHECK(snapped > 0);
 }
 
 TEST_CASE("prepare on photos as a person takes them: JPEG with EXIF, walked round at uneven steps and heights, two shaken") {
