@@ -261,8 +261,10 @@ AutoMasks automatic_masks(const io::Scene& scene, const SparsePoints& points, co
   {
     std::vector<std::vector<std::uint8_t>> first(views);
     for (std::size_t i = 0; i < views; ++i) first[i].assign(cut[i].datastart, cut[i].dataend);
-    const SilhouetteCheck check = check_silhouettes(cameras, first, extent, {}, &left_out);
-    report["first_cuts"] = check.report(cameras);
+    SilhouetteCheck check = check_silhouettes(cameras, first, extent, {}, &left_out);
+    for (std::size_t i = 0; i < views; ++i)  // the slides in the photos' own pixels, as the report and the reasons say
+      check.views[i].shift_px *= double(scene.cameras[i].width) / double(cameras[i].width);
+    report["first_cuts"] = check.report(scene.cameras);
     for (std::size_t i = 0; i < views; ++i)
       if (check.views[i].misplaced && !left_out[i]) left_out[i] = 1, out.misplaced.push_back({i, check.reason(i)});
   }
