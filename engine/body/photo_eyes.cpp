@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
 #include "engine/core/log.hpp"
 #include "engine/io/image.hpp"
@@ -60,51 +61,91 @@ FaceImage face_image_of(const io::Camera& camera) {
 
 }  // namespace
 
-std::optional<BlobHit> find_eye_blob(const FaceImage& image, glm::dvec2 centre, double search_radius, double radius,
-                                      double min_contrast) {
+std::vector<BlobHit> find_eye_blobs(const FaceImage& image, glm::dvec2 centre, double search_radius, double radius,
+                                    double min_contrast, std::size_t max_count) {
   const int r = std::max(1, int(std::lround(radius))), ring = 2 * r;
   const int reach = int(std::ceil(search_radius));
+  // The contrast is kept r beyond the search disc: a blob's curvature is measured r either side of it.
+  const int extent = reach + r, span = 2 * extent + 1;
   // Pixel (i, j) has its centre at (i + 0.5, j + 0.5).
   const int cx = int(std::floor(centre.x)), cy = int(std::floor(centre.y));
-  const BoxSums sums(image, cx - reach - ring - 1, cy - reach - ring - 1, cx + reach + ring + 1, cy + reach + ring + 1);
-  const int span = 2 * reach + 1;
-  std::vector<double> contrast(std::size_t(span) * std::size_t(span), -1e30);
+  const BoxSums sums(image, cx - extent - ring - 1, cy - extent - ring - 1, cx + extent + ring + 1, cy + extent + ring + 1);
+  const auto index = [&](int dx, int dy) { return std::size_t(dy + extent) * std::size_t(span) + std::size_t(dx + extent); };
+  std::vector<double> contrast(std::size_t(span) * std::size_t(span), 0.0);  // 0 where the ring leaves the animal
   const double full_ring = double((2 * ring + 1) * (2 * ring + 1));
-  int best = -1;
-  for (int dy = -reach; dy <= reach; ++dy)
-    for (int dx = -reach; dx <= reach; ++dx) {
-      if (dx * dx + dy * dy > reach * reach) continue;
-      const int x = cx + dx, y = cy + dy;
-      const auto [in_sum, in_count] = sums.box(x, y, r);
-      const auto [out_sum, out_count] = sums.box(x, y, ring);
+  std::vector<glm::ivec2> scored;
+  for (int dy = -extent; dy <= extent; ++dy)
+    for (int dx = -extent; dx <= extent; ++dx) {
+      const auto [in_sum, in_count] = sums.box(cx + dx, cy + dy, r);
+      const auto [out_sum, out_count] = sums.box(cx + dx, cy + dy, ring);
       if (out_count < 0.9 * full_ring || out_count - in_count <= 0) continue;  // off the animal or the photo
       const double c = glm::length((out_sum - in_sum) / (out_count - in_count) - in_sum / in_count);
-      const int k = (dy + reach) * span + (dx + reach);
-      contrast[std::size_t(k)] = c;
-      if (best < 0 || c > contrast[std::size_t(best)]) best = k;
+      contrast[index(dx, dy)] = c;
+      if (c >= min_contrast && dx * dx + dy * dy <= reach * reach) scored.push_back({dx, dy});
     }
-  if (best < 0 || contrast[std::size_t(best)] < min_contrast) return std::nullopt;
-  const int bx = cx + best % span - reach, by = cy + best / span - reach;
-  // Sub-pixel: the centroid of how far each pixel near the peak differs from the ring's mean colour,
-  // beyond half the blob's contrast (fur texture and shading below that weigh nothing).
-  const auto [ring_sum, ring_count] = sums.box(bx, by, ring);
-  const auto [core_sum, core_count] = sums.box(bx, by, r);
-  const glm::dvec3 ring_mean = (ring_sum - core_sum) / (ring_count - core_count);
-  const double reach_px = 1.5 * radius + 0.5;
-  glm::dvec2 weighted(0.0);
-  double total = 0;
-  for (int y = by - r - 1; y <= by + r + 1; ++y)
-    for (int x = bx - r - 1; x <= bx + r + 1; ++x) {
-      if (x < 0 || y < 0 || x >= int(image.width) || y >= int(image.height)) continue;
-      const std::size_t p = std::size_t(y) * image.width + std::size_t(x);
-      if (!image.mask.empty() && !image.mask[p]) continue;
-      const glm::dvec2 at(x + 0.5, y + 0.5);
-      if (glm::distance(at, glm::dvec2(bx + 0.5, by + 0.5)) > reach_px) continue;
-      const double w = std::max(0.0, glm::length(glm::dvec3(image.rgb[p]) - ring_mean) - 0.5 * contrast[std::size_t(best)]);
-      weighted += w * at, total += w;
-    }
-  const glm::dvec2 pixel = total > 0 ? weighted / total : glm::dvec2(bx + 0.5, by + 0.5);
-  return BlobHit{pixel, contrast[std::size_t(best)]};
+  // Peaks: no neighbour higher (of equal ones, the first in scan order).
+  struct Peak {
+    glm::ivec2 at;
+    double contrast, roundness;
+  };
+  std::vector<Peak> peaks;
+  for (const glm::ivec2 d : scored) {
+    const double c = contrast[index(d.x, d.y)];
+    bool peak = true;
+    for (int oy = -1; oy <= 1; ++oy)
+      for (int ox = -1; ox <= 1; ++ox) {
+        const double n = contrast[index(d.x + ox, d.y + oy)];
+        const bool earlier = oy < 0 || (oy == 0 && ox < 0);
+        peak = peak && (n < c || (n == c && !earlier) || (ox == 0 && oy == 0));
+      }
+    if (!peak) continue;
+    // Roundness: how the contrast falls away from the peak in its flattest direction against its
+    // steepest (the Hessian's eigenvalues r pixels out). An eye falls away all round (1); a stripe
+    // or a patch's edge runs on along itself (0).
+    const auto at = [&](int ox, int oy) { return contrast[index(d.x + ox, d.y + oy)]; };
+    const double c0 = at(0, 0), hxx = at(r, 0) + at(-r, 0) - 2 * c0, hyy = at(0, r) + at(0, -r) - 2 * c0;
+    const double hxy = 0.25 * (at(r, r) - at(r, -r) - at(-r, r) + at(-r, -r));
+    const double mean = 0.5 * (hxx + hyy), half_gap = std::sqrt(0.25 * (hxx - hyy) * (hxx - hyy) + hxy * hxy);
+    const double steep = mean - half_gap, flat = mean + half_gap;  // both negative at a round peak
+    peaks.push_back({d, c0, steep < 0 && flat < 0 ? flat / steep : 0.0});
+  }
+  // The eye is the round blob that stands out: contrast times roundness ranks them.
+  std::stable_sort(peaks.begin(), peaks.end(), [](const Peak& a, const Peak& b) { return a.contrast * a.roundness > b.contrast * b.roundness; });
+  if (peaks.size() > max_count) peaks.resize(max_count);
+  std::vector<BlobHit> hits;
+  for (const Peak& peak : peaks) {
+    const int bx = cx + peak.at.x, by = cy + peak.at.y;
+    const double peak_contrast = peak.contrast;
+    // Sub-pixel: the centroid of how far each pixel near the peak differs from the ring's mean colour
+    // towards the blob's (a stripe of another colour beside it does not pull), beyond half the
+    // blob's contrast (fur texture and shading below that weigh nothing).
+    const auto [ring_sum, ring_count] = sums.box(bx, by, ring);
+    const auto [core_sum, core_count] = sums.box(bx, by, r);
+    const glm::dvec3 ring_mean = (ring_sum - core_sum) / (ring_count - core_count);
+    const glm::dvec3 towards_blob = (core_sum / core_count - ring_mean) / peak_contrast;
+    const double reach_px = 1.5 * radius + 0.5;
+    glm::dvec2 weighted(0.0);
+    double total = 0;
+    for (int y = by - r - 1; y <= by + r + 1; ++y)
+      for (int x = bx - r - 1; x <= bx + r + 1; ++x) {
+        if (x < 0 || y < 0 || x >= int(image.width) || y >= int(image.height)) continue;
+        const std::size_t p = std::size_t(y) * image.width + std::size_t(x);
+        if (!image.mask.empty() && !image.mask[p]) continue;
+        const glm::dvec2 at(x + 0.5, y + 0.5);
+        if (glm::distance(at, glm::dvec2(bx + 0.5, by + 0.5)) > reach_px) continue;
+        const double w = std::max(0.0, glm::dot(glm::dvec3(image.rgb[p]) - ring_mean, towards_blob) - 0.5 * peak_contrast);
+        weighted += w * at, total += w;
+      }
+    hits.push_back({total > 0 ? weighted / total : glm::dvec2(bx + 0.5, by + 0.5), peak_contrast, peak.roundness});
+  }
+  return hits;
+}
+
+std::optional<BlobHit> find_eye_blob(const FaceImage& image, glm::dvec2 centre, double search_radius, double radius,
+                                      double min_contrast) {
+  const std::vector<BlobHit> hits = find_eye_blobs(image, centre, search_radius, radius, min_contrast, 1);
+  if (hits.empty()) return std::nullopt;
+  return hits.front();
 }
 
 namespace {
@@ -139,33 +180,56 @@ double widest_angle_deg(const std::vector<io::Camera>& cameras, const std::vecto
   return widest;
 }
 
+// Each view's observation nearest the projection of x, where within max_error_px (a view may hold
+// several candidates; it agrees through one).
+std::vector<EyeObservation> agreeing(const std::vector<io::Camera>& cameras, const std::vector<EyeObservation>& observations,
+                                     const glm::dvec3& x, double max_error_px, double* error_sum) {
+  std::vector<EyeObservation> agree;
+  std::vector<double> errors;
+  for (const EyeObservation& o : observations) {
+    const double e = reprojection_error(cameras[o.view], o, x);
+    if (e > max_error_px) continue;
+    const auto same = std::find_if(agree.begin(), agree.end(), [&](const EyeObservation& a) { return a.view == o.view; });
+    if (same == agree.end()) agree.push_back(o), errors.push_back(e);
+    else if (const std::size_t k = std::size_t(same - agree.begin()); e < errors[k]) *same = o, errors[k] = e;
+  }
+  *error_sum = 0;
+  for (const double e : errors) *error_sum += e;
+  return agree;
+}
+
 }  // namespace
 
 TriangulatedPoint triangulate(const std::vector<io::Camera>& cameras, const std::vector<EyeObservation>& observations,
                               double max_error_px, double min_angle_deg) {
   TriangulatedPoint out;
-  if (observations.size() < 2) {
-    out.reason = "seen in " + std::to_string(observations.size()) + " view(s)";
+  std::vector<std::uint32_t> seen_views;
+  for (const EyeObservation& o : observations)
+    if (std::find(seen_views.begin(), seen_views.end(), o.view) == seen_views.end()) seen_views.push_back(o.view);
+  if (seen_views.size() < 2) {
+    out.reason = "seen in " + std::to_string(seen_views.size()) + " view(s)";
     return out;
   }
-  // Every pair of views that sees it from far enough apart proposes a point; the one most views
-  // agree with (within max_error_px; the smaller error sum breaks ties) wins, then all of them refine it.
+  // Every pair of observations from two views far enough apart proposes a point; the one whose
+  // agreeing views (within max_error_px) score most wins (then the more views, then the smaller error
+  // sum), and all of them refine it.
   std::vector<EyeObservation> best;
-  double best_error = 0;
+  double best_score = 0, best_error = 0;
   for (std::size_t i = 0; i < observations.size(); ++i)
     for (std::size_t j = i + 1; j < observations.size(); ++j) {
+      if (observations[i].view == observations[j].view) continue;
       const std::vector<EyeObservation> pair{observations[i], observations[j]};
       const std::optional<glm::dvec3> x = closest_point(cameras, pair);
       if (!x || widest_angle_deg(cameras, pair, *x) < min_angle_deg) continue;
-      std::vector<EyeObservation> agree;
-      double error = 0;
-      for (const EyeObservation& o : observations)
-        if (const double e = reprojection_error(cameras[o.view], o, *x); e <= max_error_px) agree.push_back(o), error += e;
-      if (agree.size() > best.size() || (agree.size() == best.size() && error < best_error)) best = agree, best_error = error;
+      double error = 0, score = 0;
+      const std::vector<EyeObservation> agree = agreeing(cameras, observations, *x, max_error_px, &error);
+      for (const EyeObservation& o : agree) score += o.score;
+      if (std::tuple(score, agree.size(), -error) > std::tuple(best_score, best.size(), -best_error))
+        best = agree, best_score = score, best_error = error;
     }
   if (best.size() < 2) {
     out.reason = "no two views agree within " + std::to_string(max_error_px) + " px from " + std::to_string(min_angle_deg) +
-                 " degrees apart or more (" + std::to_string(observations.size()) + " views saw a candidate)";
+                 " degrees apart or more (" + std::to_string(seen_views.size()) + " views saw a candidate)";
     return out;
   }
   std::optional<glm::dvec3> x = closest_point(cameras, best);
@@ -198,7 +262,20 @@ TriangulatedPoint triangulate(const std::vector<io::Camera>& cameras, const std:
   for (const EyeObservation& o : best) sum2 += std::pow(reprojection_error(cameras[o.view], o, *x), 2);
   out.position = x;
   out.reprojection_rms_px = std::sqrt(sum2 / double(best.size()));
-  for (const EyeObservation& o : best) out.views.push_back(o.view);
+  for (const EyeObservation& o : best) out.views.push_back(o.view), out.score += o.score;
+  return out;
+}
+
+std::vector<TriangulatedPoint> triangulate_hypotheses(const std::vector<io::Camera>& cameras, std::vector<EyeObservation> observations,
+                                                      double max_error_px, std::size_t max_count, double min_angle_deg) {
+  std::vector<TriangulatedPoint> out;
+  while (out.size() < max_count) {
+    TriangulatedPoint t = triangulate(cameras, observations, max_error_px, min_angle_deg);
+    if (!t.position) break;
+    // The next hypothesis may not reuse what this one explains.
+    std::erase_if(observations, [&](const EyeObservation& o) { return reprojection_error(cameras[o.view], o, *t.position) <= max_error_px; });
+    out.push_back(std::move(t));
+  }
   return out;
 }
 
@@ -206,6 +283,17 @@ std::optional<double> PhotoEyes::distance() const {
   if (!left.position || !right.position) return std::nullopt;
   return glm::distance(*left.position, *right.position);
 }
+
+namespace {
+// Each view offers a few blobs per eye: in one view a stripe or a patch's edge may outrank the eye,
+// which the views together then outvote.
+constexpr std::size_t kCandidatesPerView = 4, kHypothesesPerEye = 4;
+// How far (in eye distances) one eye may lie from the other's mirror image across the fitted head.
+constexpr double kMaxEyeAsymmetry = 0.35;
+// The eye's opening against the eyeball's radius: the lids cover its rim, and a blob filter wider
+// than the opening averages fur into it.
+constexpr double kOpeningFraction = 0.75;
+}  // namespace
 
 PhotoEyes find_eyes_in_photos(const io::Scene& scene, const EyeSearch& search) {
   PhotoEyes out;
@@ -236,25 +324,48 @@ PhotoEyes find_eyes_in_photos(const io::Scene& scene, const EyeSearch& search) {
       const glm::dvec3 p = cam.project(fitted[e]);
       // The fit's eyes may be a third of the eye distance off each: search that far.
       const double search_px = std::max(2.0 * radius_px[e], cam.fx * 0.3 * eye_distance / p.z);
-      if (const auto hit = find_eye_blob(face, glm::dvec2(p), search_px, radius_px[e], kMinEyeContrast)) {
-        seen[e].push_back({v, hit->pixel});
-        radii_px.push_back(radius_px[e]);
-      }
+      const std::vector<BlobHit> hits =
+          find_eye_blobs(face, glm::dvec2(p), search_px, kOpeningFraction * radius_px[e], kMinEyeContrast, kCandidatesPerView);
+      for (const BlobHit& hit : hits) seen[e].push_back({v, hit.pixel, hit.contrast * hit.roundness});
+      if (!hits.empty()) radii_px.push_back(kOpeningFraction * radius_px[e]);
     }
   }
   std::sort(radii_px.begin(), radii_px.end());
   const double typical_radius = radii_px.empty() ? 1.0 : radii_px[radii_px.size() / 2];
   const double max_error = std::max(1.5, 0.75 * typical_radius);
-  out.left = triangulate(scene.cameras, seen[0], max_error);
-  out.right = triangulate(scene.cameras, seen[1], max_error);
-  // An eye placed far from where the fit puts it is another dark spot (a nostril, an ear's shadow).
+  // Each eye's hypotheses; one placed far from where the fit puts it is another dark spot (a nostril,
+  // an ear's shadow).
+  std::vector<TriangulatedPoint> hypotheses[2];
+  std::string reasons[2];
+  for (int e = 0; e < 2; ++e) {
+    std::vector<TriangulatedPoint> all = triangulate_hypotheses(scene.cameras, seen[e], max_error, kHypothesesPerEye);
+    if (all.empty()) reasons[e] = triangulate(scene.cameras, seen[e], max_error).reason;
+    for (TriangulatedPoint& t : all) {
+      const double off = glm::distance(*t.position, fitted[e]) / eye_distance;
+      if (off <= 0.5) hypotheses[e].push_back(std::move(t));
+      else if (reasons[e].empty()) reasons[e] = "found " + std::to_string(off) + " eye distances from the fitted eye: another dark spot";
+    }
+  }
+  out.hypotheses[0] = hypotheses[0], out.hypotheses[1] = hypotheses[1];
+  // The pair whose views score most, the two eyes mirror images across the fitted head's middle (a
+  // stripe or patch beside one eye is not mirrored beside the other).
+  const glm::dvec3 middle = 0.5 * (search.left + search.right), across = glm::normalize(search.left - search.right);
+  const auto mirrored = [&](const glm::dvec3& x) { return x - 2.0 * glm::dot(x - middle, across) * across; };
+  int best[2] = {-1, -1};
+  double best_score = -1;
+  for (int a = -1; a < int(hypotheses[0].size()); ++a)
+    for (int b = -1; b < int(hypotheses[1].size()); ++b) {
+      if (a < 0 && b < 0) continue;
+      if (a >= 0 && b >= 0 &&
+          glm::distance(mirrored(*hypotheses[0][std::size_t(a)].position), *hypotheses[1][std::size_t(b)].position) > kMaxEyeAsymmetry * eye_distance)
+        continue;
+      const double score = (a >= 0 ? hypotheses[0][std::size_t(a)].score : 0.0) + (b >= 0 ? hypotheses[1][std::size_t(b)].score : 0.0);
+      if (score > best_score) best_score = score, best[0] = a, best[1] = b;
+    }
   for (int e = 0; e < 2; ++e) {
     TriangulatedPoint& t = e == 0 ? out.left : out.right;
-    if (t.position && glm::distance(*t.position, fitted[e]) > 0.5 * eye_distance) {
-      t.reason = "found " + std::to_string(glm::distance(*t.position, fitted[e]) / eye_distance) +
-                 " eye distances from the fitted eye: another dark spot";
-      t.position.reset();
-    }
+    if (best[e] >= 0) t = hypotheses[e][std::size_t(best[e])];
+    else t.reason = !hypotheses[e].empty() ? "no hypothesis mirrors the other eye's" : reasons[e];
   }
   return out;
 }
@@ -262,7 +373,7 @@ PhotoEyes find_eyes_in_photos(const io::Scene& scene, const EyeSearch& search) {
 json to_json(const TriangulatedPoint& p, const std::vector<io::Camera>& cameras) {
   json views = json::array();
   for (std::uint32_t v : p.views) views.push_back(cameras[v].name);
-  json j{{"views", views}, {"reprojection_rms_px", p.reprojection_rms_px}};
+  json j{{"views", views}, {"reprojection_rms_px", p.reprojection_rms_px}, {"score", p.score}};
   j["position"] = p.position ? json_vec3(*p.position) : json();
   if (!p.reason.empty()) j["reason"] = p.reason;
   return j;

@@ -24,7 +24,7 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 5;  // 2: fit.json; 3: the head-and-body length; 4: the eyes from the photos; 5: the tail's pitch tried
+constexpr int kStageVersion = 6;  // 2: fit.json; 3: the head-and-body length; 4: the eyes from the photos; 5: the tail's pitch tried; 6: several blobs a view, round ones first, the eyes a mirrored pair
 
 // The cameras' mean up vector when they agree on one (a capture rig's usual case).
 body::FrameHints frame_hints(const io::Scene& scene) {
@@ -65,6 +65,10 @@ EyesFound eyes_of(const io::Scene& scene, const body::BodyModel& model, const bo
                             {"right", body::to_json(found.right, scene.cameras)},
                             {"views_facing", found.views_facing},
                             {"eye_radius", search.eye_radius}};
+    for (int e = 0; e < 2; ++e) {
+      json& list = out.record["photos"]["hypotheses"][e == 0 ? "left" : "right"] = json::array();
+      for (const body::TriangulatedPoint& t : found.hypotheses[e]) list.push_back(body::to_json(t, scene.cameras));
+    }
     if (found.distance()) {
       out.left = *found.left.position, out.right = *found.right.position;
       out.record["source"] = "photos";

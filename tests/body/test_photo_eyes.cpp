@@ -1,6 +1,7 @@
 // The eyes found in the photos (engine/body/photo_eyes.hpp): a blob located to a fraction of a pixel
 // under noise, by its darkness or by its colour alone, beside a larger dark distractor, the silhouette's edge refused, and
-// triangulation that keeps the views that agree, drops a wrong detection, and reports its error.
+// triangulation that keeps the views that agree, drops a wrong detection, and reports its error;
+// several candidates a view (a round eye ranked above a stripe), and the two eyes chosen as mirror images.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -45,6 +46,7 @@ io::Camera camera_looking_at(glm::dvec3 from, glm::dvec3 at) {
 
 }  // namespace
 
+
 TEST_CASE("a dark round blob is found to a fraction of a pixel, under noise, at the eye's size") {
   for (const double r : {1.5, 3.0}) {
     for (unsigned seed = 1; seed <= 5; ++seed) {
@@ -72,6 +74,34 @@ TEST_CASE("an eye of the fur's brightness is found by its colour (an olive iris 
   const auto hit = find_eye_blob(g, {25, 22}, 7.0, 2.5, 0.05);
   REQUIRE(hit.has_value());
   CHECK(glm::distance(hit->pixel, eye) < 0.6);
+}
+
+TEST_CASE("a round eye outranks a darker stripe beside it, which stays a candidate") {
+  // An olive eye (radius 2.5) in orange fur, and 5 px below it a black stripe across the window:
+  // the stripe differs more from the fur, but runs on along itself.
+  FaceImage g;
+  g.width = g.height = 48;
+  const glm::vec3 fur(0.84f, 0.47f, 0.16f), iris(0.47f, 0.43f, 0.12f), stripe(0.11f, 0.10f, 0.10f);
+  g.rgb.assign(48 * 48, fur);
+  const glm::dvec2 eye(23.4, 21.6);
+  for (std::uint32_t y = 0; y < 48; ++y)
+    for (std::uint32_t x = 0; x < 48; ++x) {
+      const glm::dvec2 at(x + 0.5, y + 0.5);
+      if (glm::distance(at, eye) < 2.5) g.rgb[y * 48 + x] = iris;
+      if (std::fabs(at.y - (eye.y + 5.5 + 0.15 * (at.x - eye.x))) < 1.5) g.rgb[y * 48 + x] = stripe;
+    }
+  const std::vector<BlobHit> hits = find_eye_blobs(g, {24, 23}, 7.0, 2.0, 0.05, 4);
+  REQUIRE(hits.size() >= 2);
+  CHECK(glm::distance(hits[0].pixel, eye) < 0.6);
+  CHECK(hits[0].roundness > 0.5);
+  // The stripe's best blob is the strongest contrast of all, and is found, ranked below the eye.
+  const auto strongest = std::max_element(hits.begin(), hits.end(), [](const BlobHit& a, const BlobHit& b) { return a.contrast < b.contrast; });
+  CHECK(strongest != hits.begin());
+  CHECK(strongest->roundness < hits[0].roundness);
+  // The single best is the same eye.
+  const auto one = find_eye_blob(g, {24, 23}, 7.0, 2.0, 0.05);
+  REQUIRE(one.has_value());
+  CHECK(glm::distance(one->pixel, hits[0].pixel) < 1e-9);
 }
 
 TEST_CASE("the search stays in its window and on the animal; a face without an eye gives none") {
@@ -129,12 +159,49 @@ TEST_CASE("triangulation keeps the views that agree, drops a wrong detection, an
   CHECK(narrow.reason.find("degrees") != std::string::npos);
 }
 
-TEST_CASE("eyes found in photos: a rig of views round a face with two eyes, the fit's eyes 1 cm off") {
-  // A face seen by seven cameras from -54 to +54 degrees; each photo a light face with the two
-  // eyes (1 cm radius, 6 cm apart) drawn as dark discs where the camera sees them.
-  const glm::dvec3 eyes[2] = {{0.03, 0.0, 0.05}, {-0.03, 0.0, 0.05}};
-  const double eye_radius = 0.01;
-  const auto dir = std::filesystem::temp_directory_path() / "nf_test_photo_eyes";
+TEST_CASE("triangulation from several candidates a view: the eye most views agree on, then the next point") {
+  const glm::dvec3 eye(0.1, 1.2, -0.3), spot(0.14, 1.17, -0.28);  // the eye, and a round spot 5 cm beside it
+  std::vector<io::Camera> cameras;
+  for (int k = 0; k < 7; ++k) {
+    const double a = -0.7 + 0.23 * k;
+    cameras.push_back(camera_looking_at(eye + 2.0 * glm::dvec3(std::sin(a), 0.3, std::cos(a)), eye));
+  }
+  std::mt19937 rng(5);
+  std::normal_distribution<double> n(0.0, 0.3);
+  std::uniform_real_distribution<double> u(-40.0, 40.0);
+  std::vector<EyeObservation> seen;
+  for (std::uint32_t v = 0; v < cameras.size(); ++v) {
+    const auto at = [&](const glm::dvec3& x) { return glm::dvec2(cameras[v].project(x)) + glm::dvec2(n(rng), n(rng)); };
+    if (v != 3) seen.push_back({v, at(eye), 0.2});                   // six views see the eye
+    if (v % 2 == 0) seen.push_back({v, at(spot), 0.3});              // four see the spot, each better than the eye
+    seen.push_back({v, at(eye) + glm::dvec2(u(rng), u(rng)), 0.5});  // and every view one stray blob, the best of all
+  }
+  // The eye's six views outscore the spot's four and any stray pair; each view agrees through one candidate.
+  const TriangulatedPoint t = triangulate(cameras, seen, 1.5);
+  REQUIRE(t.position.has_value());
+  CHECK(glm::distance(*t.position, eye) < 0.002);
+  CHECK(t.views.size() == 6);
+  CHECK(t.score == doctest::Approx(1.2).epsilon(0.35));  // the eye's six (a stray may sit near it in a view)
+  const std::vector<TriangulatedPoint> all = triangulate_hypotheses(cameras, seen, 1.5, 4);
+  REQUIRE(all.size() >= 2);
+  CHECK(glm::distance(*all[0].position, eye) < 0.002);
+  CHECK(glm::distance(*all[1].position, spot) < 0.002);
+  CHECK(all[1].views.size() == 4);
+  // What one hypothesis explains is not used again.
+  for (std::size_t k = 2; k < all.size(); ++k) CHECK(glm::distance(*all[k].position, eye) > 0.01);
+}
+
+namespace {
+
+// A face seen by seven cameras from -54 to +54 degrees; each photo a light face with dark discs
+// (world centre, world radius, grey level) drawn where the camera sees them.
+struct Disc {
+  glm::dvec3 centre;
+  double radius;
+  float grey;
+};
+
+io::Scene rig_of_photos(const std::filesystem::path& dir, const std::vector<Disc>& discs) {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   io::Scene scene;
@@ -145,19 +212,30 @@ TEST_CASE("eyes found in photos: a rig of views round a face with two eyes, the 
     io::Image photo;
     photo.width = c.width, photo.height = c.height, photo.channels = 3;
     photo.pixels.assign(std::size_t(c.width) * c.height * 3, 0.6f);
-    for (const glm::dvec3& e : eyes) {
-      if (glm::dot(glm::normalize(e), glm::normalize(glm::dvec3(c.camera_to_world[3]) - e)) < 0.2) continue;  // turned away
-      const glm::dvec3 p = c.project(e);
-      const double r = c.fx * eye_radius / p.z;
+    for (const Disc& d : discs) {
+      if (glm::dot(glm::normalize(d.centre), glm::normalize(glm::dvec3(c.camera_to_world[3]) - d.centre)) < 0.2) continue;  // turned away
+      const glm::dvec3 p = c.project(d.centre);
+      const double r = c.fx * d.radius / p.z;
       for (std::uint32_t y = 0; y < c.height; ++y)
         for (std::uint32_t x = 0; x < c.width; ++x)
           if (glm::distance(glm::dvec2(x + 0.5, y + 0.5), glm::dvec2(p)) < r)
-            for (std::size_t ch = 0; ch < 3; ++ch) photo.pixels[(std::size_t(y) * c.width + x) * 3 + ch] = 0.15f;
+            for (std::size_t ch = 0; ch < 3; ++ch) photo.pixels[(std::size_t(y) * c.width + x) * 3 + ch] = d.grey;
     }
     c.image = dir / (c.name + ".png");
     io::write_png(c.image, photo);
     scene.cameras.push_back(c);
   }
+  return scene;
+}
+
+}  // namespace
+
+TEST_CASE("eyes found in photos: a rig of views round a face with two eyes, the fit's eyes 1 cm off") {
+  // The two eyes: 1 cm radius, 6 cm apart.
+  const glm::dvec3 eyes[2] = {{0.03, 0.0, 0.05}, {-0.03, 0.0, 0.05}};
+  const double eye_radius = 0.01;
+  const auto dir = std::filesystem::temp_directory_path() / "nf_test_photo_eyes";
+  const io::Scene scene = rig_of_photos(dir, {{eyes[0], eye_radius, 0.15f}, {eyes[1], eye_radius, 0.15f}});
   const EyeSearch search{eyes[0] + glm::dvec3(0.006, 0.004, -0.006), eyes[1] + glm::dvec3(-0.008, -0.003, 0.004), {0, 0, 0}, eye_radius};
   const PhotoEyes found = find_eyes_in_photos(scene, search);
   CHECK(found.views_facing == 7);
@@ -172,3 +250,23 @@ TEST_CASE("eyes found in photos: a rig of views round a face with two eyes, the 
   std::filesystem::remove_all(dir);
 }
 
+TEST_CASE("eyes found in photos: a darker spot beside one eye, not mirrored beside the other, is not taken") {
+  // The fit's eyes 0.9 cm off, mirror images of each other; a black round spot 2.9 cm from the left eye,
+  // towards where the fit guessed it: the views rank it above the eye. The two eyes mirror each other
+  // across the head; the spot and the right eye do not.
+  const glm::dvec3 eyes[2] = {{0.03, 0.0, 0.05}, {-0.03, 0.0, 0.05}};
+  const glm::dvec3 off(0.006, 0.004, -0.006), spot = eyes[0] + 2.9 / 0.94 * off;
+  const double eye_radius = 0.01;
+  const auto dir = std::filesystem::temp_directory_path() / "nf_test_photo_eyes_spot";
+  const io::Scene scene = rig_of_photos(dir, {{eyes[0], eye_radius, 0.15f}, {eyes[1], eye_radius, 0.15f}, {spot, eye_radius, 0.0f}});
+  const EyeSearch search{eyes[0] + off, eyes[1] + glm::dvec3(-off.x, off.y, off.z), {0, 0, 0}, eye_radius};
+  const PhotoEyes found = find_eyes_in_photos(scene, search);
+  // The spot is one of the left eye's hypotheses, the best supported.
+  REQUIRE(found.hypotheses[0].size() >= 2);
+  CHECK(glm::distance(*found.hypotheses[0][0].position, spot) < 0.005);
+  REQUIRE(found.left.position.has_value());
+  REQUIRE(found.right.position.has_value());
+  CHECK(glm::distance(*found.left.position, eyes[0]) < 0.002);
+  CHECK(glm::distance(*found.right.position, eyes[1]) < 0.002);
+  std::filesystem::remove_all(dir);
+}

@@ -410,8 +410,10 @@ TEST_CASE("nf_gpu reconstruct: the surface stage on a small synthetic scene, cac
     const nf::json eyes = nf::json::parse(slurp(eyes_work / "body" / "eyes.json"));
     REQUIRE(eyes.contains("photos"));
     CHECK(eyes["photos"]["views_facing"].get<int>() >= 0);  // this scene's 64 px views may resolve no eye
-    for (const char* side : {"left", "right"})
+    for (const char* side : {"left", "right"}) {
       CHECK((eyes["photos"][side]["position"].is_array() || eyes["photos"][side].contains("reason")));
+      CHECK(eyes["photos"]["hypotheses"][side].is_array());  // every point the views agreed on, before the pair was chosen
+    }
     CHECK((eyes["source"] == "photos" || eyes_run.output.find("the eyes were not found in the photos") != std::string::npos));
     fs::remove_all(eyes_work);
   }
