@@ -348,19 +348,21 @@ PhotoEyes find_eyes_in_photos(const io::Scene& scene, const EyeSearch& search) {
   }
   out.hypotheses[0] = hypotheses[0], out.hypotheses[1] = hypotheses[1];
   // The pair whose views score most, the two eyes mirror images across the fitted head's middle (a
-  // stripe or patch beside one eye is not mirrored beside the other).
+  // stripe or patch beside one eye is not mirrored beside the other). Any such pair before one eye
+  // alone, which gives no distance.
   const glm::dvec3 middle = 0.5 * (search.left + search.right), across = glm::normalize(search.left - search.right);
   const auto mirrored = [&](const glm::dvec3& x) { return x - 2.0 * glm::dot(x - middle, across) * across; };
   int best[2] = {-1, -1};
-  double best_score = -1;
+  std::tuple<bool, double> best_score(false, -1.0);
   for (int a = -1; a < int(hypotheses[0].size()); ++a)
     for (int b = -1; b < int(hypotheses[1].size()); ++b) {
       if (a < 0 && b < 0) continue;
-      if (a >= 0 && b >= 0 &&
+      const bool pair = a >= 0 && b >= 0;
+      if (pair &&
           glm::distance(mirrored(*hypotheses[0][std::size_t(a)].position), *hypotheses[1][std::size_t(b)].position) > kMaxEyeAsymmetry * eye_distance)
         continue;
       const double score = (a >= 0 ? hypotheses[0][std::size_t(a)].score : 0.0) + (b >= 0 ? hypotheses[1][std::size_t(b)].score : 0.0);
-      if (score > best_score) best_score = score, best[0] = a, best[1] = b;
+      if (std::tuple(pair, score) > best_score) best_score = {pair, score}, best[0] = a, best[1] = b;
     }
   for (int e = 0; e < 2; ++e) {
     TriangulatedPoint& t = e == 0 ? out.left : out.right;
