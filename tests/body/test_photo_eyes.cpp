@@ -44,6 +44,16 @@ io::Camera camera_looking_at(glm::dvec3 from, glm::dvec3 at) {
   return c;
 }
 
+// `count` cameras 2 units from `at`, a little above it, from `first` radians round it in steps of `step`.
+std::vector<io::Camera> cameras_round(glm::dvec3 at, int count, double first, double step) {
+  std::vector<io::Camera> cameras;
+  for (int k = 0; k < count; ++k) {
+    const double a = first + step * k;
+    cameras.push_back(camera_looking_at(at + 2.0 * glm::dvec3(std::sin(a), 0.3, std::cos(a)), at));
+  }
+  return cameras;
+}
+
 }  // namespace
 
 
@@ -124,11 +134,7 @@ TEST_CASE("the search stays in its window and on the animal; a face without an e
 
 TEST_CASE("triangulation keeps the views that agree, drops a wrong detection, and needs two views apart") {
   const glm::dvec3 eye(0.1, 1.2, -0.3);
-  std::vector<io::Camera> cameras;
-  for (int k = 0; k < 6; ++k) {
-    const double a = -0.6 + 0.24 * k;
-    cameras.push_back(camera_looking_at(eye + 2.0 * glm::dvec3(std::sin(a), 0.3, std::cos(a)), eye));
-  }
+  const std::vector<io::Camera> cameras = cameras_round(eye, 6, -0.6, 0.24);
   std::mt19937 rng(11);
   std::normal_distribution<double> n(0.0, 0.3);
   std::vector<EyeObservation> seen;
@@ -161,11 +167,7 @@ TEST_CASE("triangulation keeps the views that agree, drops a wrong detection, an
 
 TEST_CASE("triangulation from several candidates a view: the eye most views agree on, then the next point") {
   const glm::dvec3 eye(0.1, 1.2, -0.3), spot(0.14, 1.17, -0.28);  // the eye, and a round spot 5 cm beside it
-  std::vector<io::Camera> cameras;
-  for (int k = 0; k < 7; ++k) {
-    const double a = -0.7 + 0.23 * k;
-    cameras.push_back(camera_looking_at(eye + 2.0 * glm::dvec3(std::sin(a), 0.3, std::cos(a)), eye));
-  }
+  const std::vector<io::Camera> cameras = cameras_round(eye, 7, -0.7, 0.23);
   std::mt19937 rng(5);
   std::normal_distribution<double> n(0.0, 0.3);
   std::uniform_real_distribution<double> u(-40.0, 40.0);
