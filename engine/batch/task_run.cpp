@@ -30,6 +30,8 @@ std::string env(const char* name) {
   return v ? v : "";
 }
 
+std::string slurm_gpus_of_this_process() { return env("SLURM_JOB_GPUS").empty() ? env("SLURM_STEP_GPUS") : env("SLURM_JOB_GPUS"); }
+
 // Appends this process's stdout and stderr to the task's log (every attempt in one file).
 void redirect_output(const fs::path& log) {
   fs::create_directories(log.parent_path());
@@ -47,12 +49,10 @@ void redirect_output(const fs::path& log) {
 // order in which Vulkan drivers list them; with device cgroups only the job's GPUs are visible and
 // the default choice is right.
 void take_slurm_resources() {
-  const std::string gpus = env("SLURM_JOB_GPUS").empty() ? env("SLURM_STEP_GPUS") : env("SLURM_JOB_GPUS");
-  if (env("NF_DEVICE").empty() && !gpus.empty() && std::isdigit(static_cast<unsigned char>(gpus[0]))) {
-    const std::size_t first = std::strtoul(gpus.c_str(), nullptr, 10);
-    const std::vector<std::string> visible = gpu_device_indices();
-    if (first < visible.size() && visible.size() > 1) setenv("NF_DEVICE", visible[first].c_str(), 1);
-  }
+  const std::string gpus = slurm_gpus_of_this_process();
+  if (env("NF_DEVICE").empty() && !gpus.empty())
+    if (const std::string device = nf_device_for_slurm_gpus(gpus, gpu_device_indices()); !device.empty())
+      setenv("NF_DEVICE", device.c_str(), 1);
   const std::string cpus = env("SLURM_CPUS_PER_TASK");
   if (!cpus.empty()) {
     if (env("NF_THREADS").empty()) setenv("NF_THREADS", cpus.c_str(), 1);
@@ -85,6 +85,12 @@ TaskVerdict verdict_of(int exit_code, const std::string& message) {
 
 bool may_requeue(int restarts, int max_requeues) { return restarts < max_requeues; }
 
+std::string nf_device_for_slurm_gpus(const std::string& slurm_gpus, const std::vector<std::string>& visible) {
+  if (slurm_gpus.empty() || !std::isdigit(static_cast<unsigned char>(slurm_gpus[0])) || visible.size() < 2) return "";
+  const std::size_t first = std::strtoul(slurm_gpus.c_str(), nullptr, 10);
+  return first < visible.size() ? visible[first] : "";
+}
+
 int run_task(const BatchFolder& folder, const std::string& name, const TaskRunOptions& options) {
   const std::vector<BatchTask> tasks = folder.tasks();
   const auto it = std::find_if(tasks.begin(), tasks.end(), [&](const BatchTask& t) { return t.name == name; });
@@ -116,8 +122,11 @@ int run_task(const BatchFolder& folder, const std::string& name, const TaskRunOp
     s.message.clear();
     s.exit_code = 0;
     folder.write_state(name, s);
+    const std::string gpus = slurm_gpus_of_this_process(), device = env("NF_DEVICE");
     std::printf("== %s: attempt %d of task '%s' on %s%s\n", s.started.c_str(), s.attempts, name.c_str(), s.host.c_str(),
-                job.empty() ? "" : (" (Slurm job " + job + ")").c_str());
+                job.empty() ? ""
+                            : (" (Slurm job " + job + (gpus.empty() ? "" : ", GPU " + gpus) +
+                               (device.empty() ? "" : ", NF_DEVICE " + device) + ")").c_str());
     std::fflush(stdout);
     try {
       gpu::Context context;

@@ -3,6 +3,7 @@
 // Slurm reaches the stages directly and they save their checkpoints), with its state file kept
 // and, under Slurm, the job requeued when a rerun can finish it.
 #include <string>
+#include <vector>
 
 #include "engine/batch/batch_folder.hpp"
 
@@ -37,5 +38,11 @@ int run_task(const BatchFolder& folder, const std::string& name, const TaskRunOp
 
 // The Slurm job of this process ("<array job>_<index>" or the job id), "" outside Slurm.
 std::string slurm_job_of_this_process();
+
+// The NF_DEVICE for the GPUs Slurm gave a job (SLURM_JOB_GPUS, e.g. "1" or "1,3": the node's GPU
+// numbers in gres.conf's order) among the Vulkan devices a task may use (`visible`, in the
+// driver's order): the first given GPU's device, or "" (the default device) when the list is not
+// numbers, out of range, or only one device is visible (device cgroups hide the others).
+std::string nf_device_for_slurm_gpus(const std::string& slurm_gpus, const std::vector<std::string>& visible);
 
 }  // namespace nf::batch

@@ -259,6 +259,23 @@ TEST_CASE("a task's exit is filed as done, failed (a rerun cannot fix it) or sto
   }
 }
 
+TEST_CASE("under Slurm a task takes the Vulkan device of the first GPU Slurm gave it, where several are visible") {
+  using nf::batch::nf_device_for_slurm_gpus;
+  const std::vector<std::string> four{"0", "1", "2", "3"};  // four discrete GPUs, in the driver's order
+  CHECK(nf_device_for_slurm_gpus("0", four) == "0");
+  CHECK(nf_device_for_slurm_gpus("2", four) == "2");
+  CHECK(nf_device_for_slurm_gpus("3,1", four) == "3");  // a task given two GPUs runs on the first
+  // Vulkan's indices are of all devices; a machine's discrete GPUs need not be 0..N-1 among them.
+  CHECK(nf_device_for_slurm_gpus("1", {"1", "2"}) == "2");
+  // The default device where nothing else is sure: device cgroups leave one GPU visible, the number
+  // is beyond the devices seen, no GPU was given, or the variable is not a list of numbers.
+  CHECK(nf_device_for_slurm_gpus("3", {"0"}).empty());
+  CHECK(nf_device_for_slurm_gpus("4", four).empty());
+  CHECK(nf_device_for_slurm_gpus("", four).empty());
+  CHECK(nf_device_for_slurm_gpus("(null)", four).empty());
+  CHECK(nf_device_for_slurm_gpus("1", {}).empty());  // no GPU at all (a CPU driver)
+}
+
 TEST_CASE("a task whose WORK another live run holds leaves that run's state alone and exits 75") {
   const fs::path dir = fresh("busy");
   fs::create_directories(dir / "a");

@@ -3,11 +3,14 @@
 // - local: two scenes two at a time, the runner stopped with SIGTERM in their fur stages, then run
 //   again: each resumes from its checkpoint and ends like the same scene run with `reconstruct`;
 //   status, the reports, and the WORK lock refusing a second run;
-// - Slurm: a real one-node cluster (tests/batch/slurm_cluster.sh: munged, slurmctld, slurmd of
-//   Debian's packages) runs the scenes as a job array two at a time; one task is requeued with
-//   `scontrol requeue` and one is sent SIGTERM in its fur stage; all finish, resumed from their
-//   checkpoints, and write what reconstruct writes (with 4 scenes, the first is compared with the
-//   same scene run by `reconstruct`).
+// - Slurm: a real two-node cluster (tests/batch/slurm_cluster.sh: munged, slurmctld and a slurmd
+//   per node of Debian's packages, each node under a host name of its own) runs the scenes as a
+//   job array, a task per node; one task is requeued with `scontrol requeue` and one is sent
+//   SIGTERM in its fur stage; then the node running the first task, resumed, is crashed (every
+//   process of it killed at once): Slurm finds the node down and requeues the task, which resumes
+//   on the other node and takes its WORK lock over from the dead host. All finish, resumed from
+//   their checkpoints, and write what reconstruct writes (with 4 scenes, the first is compared
+//   with the same scene run by `reconstruct`).
 //   NF_SLURM_SCENES sets how many scenes (default 2; the `long` entry runs 4).
 #include <doctest/doctest.h>
 
@@ -198,15 +201,17 @@ TEST_CASE("batch, local backend: two scenes at a time, stopped with SIGTERM in t
   fs::remove_all(root);
 }
 
-TEST_CASE("batch, Slurm backend: a job array on a real one-node cluster, one task requeued and one sent SIGTERM mid-fur") {
+TEST_CASE("batch, Slurm backend: a job array on a real two-node cluster, one task requeued, one sent SIGTERM and one node crashed mid-fur") {
   const int count = std::getenv("NF_SLURM_SCENES") ? std::atoi(std::getenv("NF_SLURM_SCENES")) : 2;
   REQUIRE((count >= 2 && count <= 4));
   const fs::path root = fs::temp_directory_path() / ("nf_batch_slurm_" + std::to_string(count));
   fs::remove_all(root);
   const fs::path cluster = root / "cluster";
-  const std::string started = shell(std::string(NF_SLURM_CLUSTER_SCRIPT) + " start " + cluster.string());
+  const std::string started = shell(std::string(NF_SLURM_CLUSTER_SCRIPT) + " start " + cluster.string() + " 2");
   REQUIRE_MESSAGE(fs::exists(cluster / "slurm.conf"), started);
-  const std::string env = "SLURM_CONF=" + (cluster / "slurm.conf").string();
+  // A lock another host has not refreshed for 15 s is taken over (300 s on a cluster): the crashed
+  // node's task leaves one behind.
+  const std::string env = "SLURM_CONF=" + (cluster / "slurm.conf").string() + " NF_WORK_LOCK_STALE_S=15";
   struct StopCluster {
     fs::path dir;
     ~StopCluster() { std::system((std::string(NF_SLURM_CLUSTER_SCRIPT) + " stop " + dir.string() + " >/dev/null 2>&1").c_str()); }
@@ -223,15 +228,16 @@ TEST_CASE("batch, Slurm backend: a job array on a real one-node cluster, one tas
     timeline += line;
   };
 
-  const Result submitted = run("batch run " + (root / "m.json").string() + " --backend slurm --max-parallel 2 --cpus-per-task 1", env);
+  const Result submitted = run("batch run " + (root / "m.json").string() + " --backend slurm --max-parallel 2 --cpus-per-task 1 --gpus-per-task 1", env);
   REQUIRE_MESSAGE(submitted.code == 0, submitted.output);
   std::smatch m;
   REQUIRE_MESSAGE(std::regex_search(submitted.output, m, std::regex("submitted job array ([0-9]+)")), submitted.output);
   const std::string job = m[1].str();
   mark("submitted job array " + job + " (" + std::to_string(count) + " scenes, 2 at a time)");
   CHECK(slurp(batch / "batch.sbatch").find("#SBATCH --requeue") != std::string::npos);
+  CHECK(slurp(batch / "batch.sbatch").find("#SBATCH --gres=gpu:1") != std::string::npos);
   // Submitted, so a second submission leaves them alone while they are queued or running.
-  const Result resubmitted = run("batch run " + (root / "m.json").string() + " --backend slurm --max-parallel 2 --cpus-per-task 1", env);
+  const Result resubmitted = run("batch run " + (root / "m.json").string() + " --backend slurm --max-parallel 2 --cpus-per-task 1 --gpus-per-task 1", env);
   CHECK(resubmitted.code == 0);
   CHECK(resubmitted.output.find("nothing submitted") != std::string::npos);
 
@@ -250,9 +256,28 @@ TEST_CASE("batch, Slurm backend: a job array on a real one-node cluster, one tas
   // Slurm holds a requeued job for two minutes before it may start again; the test releases them,
   // 10 s on: a requeued task released at once was started while its last run was still being torn
   // down, and Slurm killed it ("Job credential revoked") with nothing left to requeue it.
+  // Once the first task has resumed, the node running it is crashed: Slurm finds it down (6 s
+  // without an answer, the cluster's SlurmdTimeout) and requeues the task, which can only run on
+  // the other node now.
   bool all_done = false;
   std::set<std::string> resumed;
   std::map<std::string, double> released;  // job id -> when it was last released (t0's seconds)
+  std::string crashed_node;
+  bool down_seen = false, resumed_after_crash = false;
+  const auto hosts_of = [&](const std::string& name) {  // the host of each attempt, from the task's log
+    std::vector<std::string> hosts;
+    const std::string log = slurp(batch / "logs" / (name + ".log"));
+    const std::regex attempt("attempt [0-9]+ of task '" + name + "' on ([A-Za-z0-9._-]+)");
+    for (auto it = std::sregex_iterator(log.begin(), log.end(), attempt); it != std::sregex_iterator(); ++it) hosts.push_back((*it)[1].str());
+    return hosts;
+  };
+  const auto occurrences = [&](const std::string& name, const std::string& text) {  // in the task's log
+    const std::string log = slurp(batch / "logs" / (name + ".log"));
+    std::size_t n = 0;
+    for (std::size_t at = log.find(text); at != std::string::npos; at = log.find(text, at + 1)) ++n;
+    return n;
+  };
+  const auto resumes_of = [&](const std::string& name) { return occurrences(name, "fur: resuming from"); };
   while (!all_done && t0.seconds() < 600) {
     std::this_thread::sleep_for(std::chrono::seconds(2));
     const std::string pending = shell(env + " squeue -h -t PD -r -o '%i %r'");
@@ -263,10 +288,27 @@ TEST_CASE("batch, Slurm backend: a job array on a real one-node cluster, one tas
         released[id] = t0.seconds();
       }
     for (const Scene& s : scenes)
-      if (!resumed.count(s.name) && slurp(batch / "logs" / (s.name + ".log")).find("fur: resuming from") != std::string::npos) {
+      if (!resumed.count(s.name) && resumes_of(s.name) >= 1) {
         resumed.insert(s.name);
-        mark(s.name + " resumed from its fur checkpoint");
+        const auto hosts = hosts_of(s.name);
+        mark(s.name + " resumed from its fur checkpoint on " + (hosts.empty() ? "?" : hosts.back()));
+        if (s.name == scenes[0].name && !hosts.empty()) {
+          crashed_node = hosts.back();
+          const std::string crash = shell(std::string(NF_SLURM_CLUSTER_SCRIPT) + " crash " + cluster.string() + " " + crashed_node);
+          REQUIRE_MESSAGE(crash.empty(), crash);
+          mark("node " + crashed_node + " crashed (its slurmd, job step and task killed)");
+        }
       }
+    if (!crashed_node.empty() && !down_seen &&
+        shell(env + " sinfo -h -n " + crashed_node + " -o %T").find("down") != std::string::npos) {
+      down_seen = true;
+      mark("Slurm finds node " + crashed_node + " down");
+    }
+    if (!crashed_node.empty() && !resumed_after_crash && resumes_of(scenes[0].name) >= 2) {
+      resumed_after_crash = true;
+      const auto hosts = hosts_of(scenes[0].name);
+      mark(scenes[0].name + " resumed from its fur checkpoint on " + (hosts.empty() ? "?" : hosts.back()));
+    }
     all_done = true;
     for (const json& row : status_of(batch, env)) all_done = all_done && (row["state"] == "done" || row["name"] == "broken");
     all_done = all_done && shell(env + " squeue -h").empty();
@@ -276,7 +318,7 @@ TEST_CASE("batch, Slurm backend: a job array on a real one-node cluster, one tas
   REQUIRE_MESSAGE(all_done, (shell(env + " squeue") + shell("tail -n 30 " + (cluster / "log" / "slurmctld.log").string())));
   const json rows = status_of(batch, env);
   REQUIRE(rows.size() == scenes.size() + 1);
-  CHECK(rows[0]["attempts"] == 2);
+  CHECK(rows[0]["attempts"] == 3);
   CHECK(rows[1]["attempts"] == 2);
   for (std::size_t i = 2; i < scenes.size(); ++i) CHECK(rows[i]["attempts"] == 1);
   // Bad input fails once and is not requeued.
@@ -293,6 +335,23 @@ TEST_CASE("batch, Slurm backend: a job array on a real one-node cluster, one tas
   // The task sent SIGTERM asked Slurm to requeue it; the one requeued by scontrol was stopped by Slurm.
   const std::string log1 = slurp(batch / "logs" / (scenes[1].name + ".log"));
   CHECK(log1.find("task '" + scenes[1].name + "' requeued") != std::string::npos);
+  // The crashed node's task ran its third attempt on the other node, which took its WORK lock over
+  // from the dead host once the lock was older than NF_WORK_LOCK_STALE_S.
+  CHECK(down_seen);
+  CHECK(resumed_after_crash);
+  const auto hosts0 = hosts_of(scenes[0].name);
+  REQUIRE(hosts0.size() == 3);
+  CHECK(hosts0[1] == crashed_node);
+  CHECK(hosts0[2] != crashed_node);
+  CHECK(log0.find("was held by " + crashed_node) != std::string::npos);
+  CHECK(log0.find("host '" + crashed_node + "' has not refreshed it") != std::string::npos);
+  // Both nodes ran tasks.
+  std::set<std::string> hosts_used;
+  for (const Scene& s : scenes)
+    for (const std::string& h : hosts_of(s.name)) hosts_used.insert(h);
+  CHECK(hosts_used == std::set<std::string>{"nfnode1", "nfnode2"});
+  // Each attempt was given its node's one GPU (a stand-in device; Vulkan's lavapipe runs it).
+  for (const Scene& s : scenes) CHECK(occurrences(s.name, ", GPU 0)") == hosts_of(s.name).size());
   CHECK(shell(env + " squeue -h").empty());
 
   // Every task wrote what reconstruct writes; with 4 scenes (label long) the first is also compared
