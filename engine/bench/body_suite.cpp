@@ -79,7 +79,8 @@ json run_body_suite(gpu::Context& ctx, const Options& options) {
       const json km = json::parse(kin);
       if (km.contains("ground_truth")) {
         const json& kg = km["ground_truth"];
-        for (const char* key : {"scale_from_eyes_error", "scale_from_cues_error", "scale_cue_errors", "eye_distance_error", "frame_error_degrees"})
+        for (const char* key : {"scale_from_eyes_error", "scale_from_cues_error", "scale_cue_errors", "scale_cues_spread", "scale_covered",
+                                "scale_from_cues_error_own_eyes", "scale_from_eyes_error_own_eyes", "eye_distance_error", "frame_error_degrees"})
           if (kg.contains(key)) metrics[key] = kg[key];
       }
       // De-furring against the true bald body, and the frames against the true growth.

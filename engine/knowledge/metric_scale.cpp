@@ -1,5 +1,6 @@
 #include "engine/knowledge/metric_scale.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -45,7 +46,14 @@ MetricScale metric_scale(const ScaleInputs& in) {
       names.push_back(c.name);
     }
     s.from_cues = std::exp(sum / sum_w);
-    s.spread = 1.0 / std::sqrt(sum_w);
+    // Cues that disagree beyond their spreads show that those spreads are too small for this animal
+    // (an individual far from its kind, a poor fit): the combination's spread grows by the Birge
+    // ratio sqrt(chi^2 / (n - 1)), never shrinks, as for inconsistent measurements of one quantity.
+    double chi2 = 0;
+    for (const ScaleCue& c : s.cues) chi2 += std::pow(std::log(c.cm_per_unit / *s.from_cues) / c.spread, 2);
+    const double birge = s.cues.size() > 1 ? std::max(1.0, std::sqrt(chi2 / double(s.cues.size() - 1))) : 1.0;
+    s.cues_spread = birge / std::sqrt(sum_w);
+    s.spread = s.cues_spread;
     s.source = join(names, " + ");
     s.cm_per_unit = *s.from_cues;
   }
@@ -96,6 +104,7 @@ json to_json(const MetricScale& s) {
   json j{{"cm_per_unit", s.cm_per_unit}, {"source", s.source}, {"spread", s.spread}, {"cues", cues}};
   j["from_eyes"] = s.from_eyes ? json(*s.from_eyes) : json();
   j["from_cues"] = s.from_cues ? json(*s.from_cues) : json();
+  if (s.from_cues) j["cues_spread"] = s.cues_spread;
   if (s.disagreement) j["disagreement"] = *s.disagreement;
   if (!s.warning.empty()) j["warning"] = s.warning;
   return j;

@@ -4,7 +4,7 @@
 // combined: the knowledge's eye distance over the fitted eyes' distance (the paper's estimate) and
 // the knowledge's head-and-body length over the fitted body's. Each cue carries how far it may be
 // off (a relative spread); the combination is their weighted mean in log space, with its own
-// spread. Cues that disagree by more than their spreads allow, or a given scale that a cue
+// spread (widened when the cues disagree beyond theirs). Cues that disagree by more than their spreads allow, or a given scale that a cue
 // contradicts by more than 20 %, are warnings (wrong units, an unusual individual, a poor fit).
 #include <optional>
 #include <string>
@@ -42,6 +42,7 @@ struct MetricScale {
   double cm_per_unit = 0;
   std::string source;                  // "--scene-scale", "scene", "eyes", "body length" or "eyes + body length"
   double spread = 0;                   // relative; 0 for a given or declared unit
+  double cues_spread = 0;              // the cues' combination's, relative (when there is one)
   std::vector<ScaleCue> cues;          // every cue the animal gave
   std::optional<double> from_eyes;     // the eyes' estimate, when the body has eyes
   std::optional<double> from_cues;     // the cues combined, when there is any

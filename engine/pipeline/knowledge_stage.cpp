@@ -25,7 +25,7 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 3;  // 2: the body length as a second scale cue; 3: the photos' eyes
+constexpr int kStageVersion = 4;  // 2: the body length as a second scale cue; 3: the photos' eyes; 4: the spread widened when cues disagree
 
 std::string source_help() {
   return "name one source of fur knowledge: --set knowledge.preset=NAME (presets: " + join(knowledge::preset_names()) +
@@ -115,15 +115,32 @@ json annotate_with_vlm(const StageContext& c, const KnowledgeSettings& s, const 
 }
 
 // How the fitted body and the scale compare with an `nf_gpu synth` scene's ground truth.
-json ground_truth_metrics(const StageContext& c, const knowledge::MetricScale& scale, double eye_units, const glm::dmat4& fitted) {
+json ground_truth_metrics(const StageContext& c, const knowledge::ScaleInputs& inputs, const knowledge::MetricScale& scale, const glm::dmat4& fitted) {
   const std::optional<io::GroundTruth> gt = io::find_ground_truth(c.scene_dir);
   if (!gt) return json();
   json out{{"cm_per_unit", gt->cm_per_unit}, {"scale_error", scale.cm_per_unit / gt->cm_per_unit - 1.0}};
   if (scale.from_eyes) out["scale_from_eyes_error"] = *scale.from_eyes / gt->cm_per_unit - 1.0;
   if (scale.from_cues) out["scale_from_cues_error"] = *scale.from_cues / gt->cm_per_unit - 1.0;
   for (const knowledge::ScaleCue& cue : scale.cues) out["scale_cue_errors"][cue.name] = cue.cm_per_unit / gt->cm_per_unit - 1.0;
+  if (scale.from_cues) {  // whether the spread the cues report covers the truth
+    out["scale_cues_spread"] = scale.cues_spread;
+    out["scale_covered"] = std::fabs(std::log(*scale.from_cues / gt->cm_per_unit)) <= scale.cues_spread;
+  }
   const io::JsonField info(gt->info, gt->scene_json().string());
-  if (const auto eye = info.find("eye_distance_cm")) out["eye_distance_error"] = eye_units * gt->cm_per_unit / eye->number() - 1.0;
+  if (const auto eye = info.find("eye_distance_cm")) {
+    out["eye_distance_error"] = inputs.eye_distance_units * gt->cm_per_unit / eye->number() - 1.0;
+    // The cues for an individual whose eyes are as far apart as the knowledge says: its own eye
+    // distance in place of the knowledge's (what is left is the measurement's error and the body
+    // length's).
+    knowledge::ScaleInputs own = inputs;
+    own.eye_distance_cm = eye->number();
+    own.scene_declared.reset(), own.user_given.reset();
+    if (own.eye_distance_units > 0) {
+      const knowledge::MetricScale m = knowledge::metric_scale(own);
+      if (m.from_cues) out["scale_from_cues_error_own_eyes"] = *m.from_cues / gt->cm_per_unit - 1.0;
+      if (m.from_eyes) out["scale_from_eyes_error_own_eyes"] = *m.from_eyes / gt->cm_per_unit - 1.0;
+    }
+  }
   if (const auto rows = info.find("animal_to_world")) {
     const glm::dmat4 truth = io::matrix_rows(*rows);
     const auto angle = [&](int axis) {
@@ -256,7 +273,7 @@ json KnowledgeStage::run(StageContext& c, const fs::path& out_dir, const fs::pat
   int furred = 0;
   for (int r = 0; r < body::kRegionCount; ++r) furred += k.grows_fur(body::Region(r)) ? 1 : 0;
   summary["regions_with_fur"] = furred;
-  const json gt = ground_truth_metrics(c, scale, eye_units, animal_to_world);
+  const json gt = ground_truth_metrics(c, scale_inputs, scale, animal_to_world);
   if (!gt.is_null()) summary["ground_truth"] = gt;
   summary["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_file_atomic(out.metrics(), dump_text(summary, 2) + "\n");

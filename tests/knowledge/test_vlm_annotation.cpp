@@ -274,13 +274,25 @@ TEST_CASE("metric scale: the eyes and the body length combine by their spreads; 
   CHECK(both.cm_per_unit > 90.0);
   CHECK(both.spread < kBodyLengthCueSpread);
   CHECK(both.warning.empty());  // 25 % apart: within sqrt(0.25^2 + 0.15^2) = 29 %
+  // Cues that agree within their spreads: the combination's spread is the inverse-variance one.
+  CHECK(both.spread == doctest::Approx(1 / std::sqrt(we + wb)));
+  CHECK(both.cues_spread == doctest::Approx(both.spread));
   // The eyes say 50, half the body length's 100: beyond what the two spreads allow.
   const MetricScale apart = scale_of(3.2, 0.064, std::nullopt, std::nullopt, 46.0, 0.46);
   CHECK(apart.warning.find("differ by 50 %") != std::string::npos);
   CHECK(apart.warning.find("--scene-scale") != std::string::npos);
+  // ... so the spread they report grows by the Birge ratio, |log 2| / sqrt(0.25^2 + 0.15^2) = 2.38
+  // for two cues, and covers the truth whichever of them is right (spread 31 %, log 2 = 69 % apart).
+  const double birge = std::log(2.0) / std::hypot(kEyeCueSpread, kBodyLengthCueSpread);
+  CHECK(apart.spread == doctest::Approx(birge / std::sqrt(we + wb)));
+  CHECK(apart.spread > 0.3);
+  CHECK(std::fabs(std::log(apart.cm_per_unit / 100.0)) < 1.5 * apart.spread);
+  CHECK(std::fabs(std::log(apart.cm_per_unit / 50.0)) < 2.5 * apart.spread);
   // A declared unit wins, and a cue 30 % off it is named.
   const MetricScale declared = scale_of(3.2, 0.032, 100.0, std::nullopt, 46.0, 0.3538);
   CHECK(declared.cm_per_unit == doctest::Approx(100.0));
+  CHECK(declared.spread == 0);
+  CHECK(declared.cues_spread > 0);  // the cues' own, kept for the record
   CHECK(declared.warning.find("the body length") != std::string::npos);
   CHECK(declared.warning.find("the eyes") == std::string::npos);
   // No eyes, only the body length.
