@@ -4,8 +4,9 @@
 // combined: the knowledge's eye distance over the fitted eyes' distance (the paper's estimate) and
 // the knowledge's head-and-body length over the fitted body's. Each cue carries how far it may be
 // off (a relative spread); the combination is their weighted mean in log space, with its own
-// spread (widened when the cues disagree beyond theirs). Cues that disagree by more than their spreads allow, or a given scale that a cue
-// contradicts by more than 20 %, are warnings (wrong units, an unusual individual, a poor fit).
+// spread (widened when the cues disagree beyond theirs). Cues that disagree by more than their
+// spreads allow, or a given scale that a cue contradicts by more than 20 %, are warnings (wrong
+// units, an unusual individual, a poor fit).
 #include <optional>
 #include <string>
 #include <vector>
