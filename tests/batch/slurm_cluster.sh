@@ -18,22 +18,39 @@ cmd=${1:?start|crash|stop}
 dir=$(realpath -m "${2:?DIR}")
 conf=$dir/slurm.conf
 
-# Every process in the UTS namespace of the node whose slurmd wrote this pid file.
-node_processes() {
-  local pid ns p
+# The UTS namespace of the node whose slurmd wrote this pid file ("" when it is gone).
+node_namespace() {
+  local pid ns
   pid=$(cat "$1" 2>/dev/null) || return 0
   ns=$(readlink "/proc/$pid/ns/uts" 2>/dev/null) || return 0
-  [ "$ns" != "$(readlink /proc/$$/ns/uts)" ] || return 0  # never this host's own processes
-  for p in /proc/[0-9]*; do
-    [ "$(readlink "$p/ns/uts" 2>/dev/null)" = "$ns" ] && echo "${p#/proc/}"
-  done
+  [ "$ns" != "$(readlink /proc/$$/ns/uts)" ] && echo "$ns"  # never this host's own processes
   return 0
+}
+
+# Kills every live process in that namespace with SIGKILL, again until none is left: a job step
+# may start a process while the others are being killed. Zombies are dead already.
+kill_namespace() {
+  local ns=$1 p pids
+  [ -n "$ns" ] || return 0
+  for _ in $(seq 50); do
+    pids=()
+    for p in /proc/[0-9]*; do
+      [ "$(readlink "$p/ns/uts" 2>/dev/null)" = "$ns" ] || continue
+      [ "$(awk '{print $3}' "$p/stat" 2>/dev/null)" = Z ] && continue
+      pids+=("${p#/proc/}")
+    done
+    [ ${#pids[@]} -gt 0 ] || return 0
+    kill -9 "${pids[@]}" 2>/dev/null || true  # some may have ended since they were listed
+    sleep 0.1
+  done
+  echo "processes of namespace $ns survived SIGKILL" >&2
+  return 1
 }
 
 stop() {
   # A node's job steps and tasks first: they outlive their slurmd otherwise.
   for f in "$dir"/slurmd-*.pid; do
-    [ -f "$f" ] && node_processes "$f" | xargs -r kill -9 2>/dev/null || true
+    [ -f "$f" ] && { kill_namespace "$(node_namespace "$f")" || true; }
   done
   for f in "$dir"/slurmd-*.pid "$dir/slurmctld.pid" "$dir/munged.pid"; do
     if [ -f "$f" ]; then kill "$(cat "$f")" 2>/dev/null || true; fi
@@ -61,7 +78,7 @@ case "$cmd" in
   crash)
     node=${3:?NODE}
     [ -f "$dir/slurmd-$node.pid" ] || { echo "no node '$node' runs in $dir" >&2; exit 1; }
-    node_processes "$dir/slurmd-$node.pid" | xargs -r kill -9
+    kill_namespace "$(node_namespace "$dir/slurmd-$node.pid")"
     rm -f "$dir/slurmd-$node.pid"
     exit 0 ;;
   start) ;;
