@@ -265,8 +265,8 @@ Region region_rule(const QuadrupedProportions& p, const Skeleton& s, const Primi
     case Part::neck: return p.mane ? Region::mane : Region::neck;
     case Part::leg_front: return Region::leg_front;
     case Part::leg_rear: return Region::leg_rear;
-    case Part::paw_front: return n.y < -0.6f ? Region::paw_pads : Region::front_paws;
-    case Part::paw_rear: return n.y < -0.6f ? Region::paw_pads : Region::paws;
+    case Part::paw_front: return n.y < -float(kPadFacing) ? Region::paw_pads : Region::front_paws;
+    case Part::paw_rear: return n.y < -float(kPadFacing) ? Region::paw_pads : Region::paws;
     case Part::tail: return near_tail_root ? Region::under_tail : Region::tail;
     case Part::torso:
       if (near_tail_root) return Region::under_tail;

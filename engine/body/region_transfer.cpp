@@ -22,6 +22,30 @@ std::vector<std::int32_t> nearest_regions(const geometry::Mesh& target, const ge
   return out;
 }
 
+std::size_t pads_face_down(geometry::Mesh& mesh, const glm::dvec3& up) {
+  if (mesh.regions.size() != mesh.vertex_count() || mesh.normals.size() != mesh.positions.size())
+    throw InputError("pads by their normals: the mesh needs regions and normals");
+  const std::int32_t pads = region_id(Region::paw_pads), front = region_id(Region::front_paws), rear = region_id(Region::paws);
+  const glm::dvec3 u = glm::normalize(up);
+  std::vector<float> fur_xyz;
+  std::vector<std::int32_t> fur_region;
+  std::vector<std::size_t> sideways;
+  for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+    const std::int32_t r = mesh.regions[v];
+    if (r == front || r == rear) {
+      fur_xyz.insert(fur_xyz.end(), &mesh.positions[3 * v], &mesh.positions[3 * v] + 3);
+      fur_region.push_back(r);
+    } else if (r == pads) {
+      const glm::dvec3 n(mesh.normals[3 * v], mesh.normals[3 * v + 1], mesh.normals[3 * v + 2]);
+      if (glm::dot(n, u) >= -kPadFacing * glm::length(n)) sideways.push_back(v);  // a zero normal faces nowhere: not a pad
+    }
+  }
+  if (fur_region.empty() || sideways.empty()) return 0;
+  const geometry::PointIndex index(fur_xyz);
+  for (const std::size_t v : sideways) mesh.regions[v] = fur_region[index.nearest(&mesh.positions[3 * v]).first];
+  return sideways.size();
+}
+
 RegionAccuracy region_accuracy(const geometry::Mesh& mesh, const geometry::Mesh& reference) {
   if (mesh.regions.size() != mesh.vertex_count()) throw InputError("region accuracy: the mesh has no regions");
   const std::vector<std::int32_t> truth = nearest_regions(mesh, reference);

@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <vector>
 
+#include <glm/glm.hpp>
+
 #include "engine/body/regions.hpp"
 #include "engine/core/json.hpp"
 #include "engine/geometry/mesh.hpp"
@@ -13,6 +15,14 @@ namespace nf::body {
 
 // The region of the nearest vertex of `labelled` for every vertex of `target`.
 std::vector<std::int32_t> nearest_regions(const geometry::Mesh& target, const geometry::Mesh& labelled);
+
+// The pads are where a paw faces the ground: the template's own rule (a paw's vertex whose normal
+// lies within 53 degrees of down) applied to `mesh`'s normals, `up` the animal's up in its frame.
+// Moved by nearest vertex onto a surface that lies off the template (M_NeuS over the paws' fur, the
+// fitted paw grown to that envelope), the template's soles also take the paws' lower sides, which
+// are fur; a vertex labelled pads that does not face down takes the region of the nearest vertex
+// labelled a paw's fur. Returns how many vertices changed. Needs normals and regions.
+std::size_t pads_face_down(geometry::Mesh& mesh, const glm::dvec3& up);
 
 struct RegionAccuracy {
   double accuracy = 0;                          // area-weighted share of the surface labelled as the reference

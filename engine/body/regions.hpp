@@ -20,6 +20,10 @@ inline constexpr std::array<std::string_view, kRegionCount> kRegionNames = {
     "leg_front", "leg_rear", "paw_pads", "paws", "front_paws", "belly", "neck", "face", "ears",
     "inner_earcanal", "under_tail", "eyes", "tail", "nosetip", "body", "mane"};
 
+// A paw's vertex is a pad when its normal's component along the animal's up is below -kPadFacing
+// (within 53 degrees of down): the sole that meets the ground.
+inline constexpr double kPadFacing = 0.6;
+
 inline std::int32_t region_id(Region r) { return static_cast<std::int32_t>(r); }
 std::optional<Region> region_from_name(std::string_view name);
 // Throws InputError naming `source` when the id is outside the table.

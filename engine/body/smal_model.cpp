@@ -189,9 +189,9 @@ BodyModel load_smal_model(const std::filesystem::path& file) {
       case Part::muzzle: r = Region::face; break;
       case Part::ear: r = n.z > 0.5 ? Region::inner_earcanal : Region::ears; break;
       case Part::leg_front: r = Region::leg_front; break;
-      case Part::paw_front: r = n.y < -0.6 ? Region::paw_pads : Region::front_paws; break;
+      case Part::paw_front: r = n.y < -kPadFacing ? Region::paw_pads : Region::front_paws; break;
       case Part::leg_rear: r = Region::leg_rear; break;
-      case Part::paw_rear: r = n.y < -0.6 ? Region::paw_pads : Region::paws; break;
+      case Part::paw_rear: r = n.y < -kPadFacing ? Region::paw_pads : Region::paws; break;
       case Part::tail: r = near_tail_root ? Region::under_tail : Region::tail; break;
     }
     m.regions[i] = region_id(r);

@@ -13,6 +13,7 @@
 #include "engine/core/error.hpp"
 #include "engine/core/interrupt.hpp"
 #include "engine/core/log.hpp"
+#include "engine/geometry/mesh_tools.hpp"
 #include "engine/io/ground_truth.hpp"
 #include "engine/io/json_fields.hpp"
 #include "engine/io/mesh.hpp"
@@ -24,7 +25,7 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 6;  // 2: fit.json; 3: the head-and-body length; 4: the eyes from the photos; 5: the tail's pitch tried; 6: several blobs a view, round ones first, the eyes a mirrored pair
+constexpr int kStageVersion = 7;  // 2: fit.json; 3: the head-and-body length; 4: the eyes from the photos; 5: the tail's pitch tried; 6: several blobs a view, round ones first, the eyes a mirrored pair; 7: pads only where M_NeuS faces down
 
 // The cameras' mean up vector when they agree on one (a capture rig's usual case).
 body::FrameHints frame_hints(const io::Scene& scene) {
@@ -206,6 +207,9 @@ json BodyStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) {
     log::info("body: stage ", r.name, ": chamfer ", r.chamfer_start, " -> ", r.chamfer_end, " scene units in ", r.seconds, " s");
 
   target.regions = body::nearest_regions(target, fit.fitted);
+  if (target.normals.empty()) geometry::compute_vertex_normals(target);
+  const std::size_t sideways_pads = body::pads_face_down(target, glm::dvec3(fit.animal_to_world[1]));
+  log::info("body: ", sideways_pads, " vertices of M_NeuS on the paws' sides took the paws' fur from the pads");
   io::write_mesh_ply(out.outer_regions(), target);
   io::write_mesh_ply(out.fitted(), fit.fitted);
 

@@ -28,7 +28,7 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 2;  // 2: the knowledge's mane labelled on M_NeuS and M_bald
+constexpr int kStageVersion = 3;  // 2: the knowledge's mane labelled on M_NeuS and M_bald; 3: pads only where M_bald faces down
 
 // The bald body's grid for the penetration loss: spacing half the fur's median thickness, so a
 // strand point sunk by a fraction of the fur layer is resolved, within 64..256 samples along the
@@ -173,6 +173,8 @@ json DefurStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) 
   } else {
     bald.regions = body::nearest_regions(bald, outer);
   }
+  if (bald.normals.empty()) geometry::compute_vertex_normals(bald);
+  body::pads_face_down(bald, glm::dvec3(fit.animal_to_world[1]));
   seconds["refit"] = t.seconds();
 
   t.restart();
