@@ -116,9 +116,12 @@ std::vector<BlobHit> find_eye_blobs(const FaceImage& image, glm::dvec2 centre, d
   for (const Peak& peak : peaks) {
     const int bx = cx + peak.at.x, by = cy + peak.at.y;
     const double peak_contrast = peak.contrast;
-    // Sub-pixel: the centroid of how far each pixel near the peak differs from the ring's mean colour
-    // towards the blob's (a stripe of another colour beside it does not pull), beyond half the
-    // blob's contrast (fur texture and shading below that weigh nothing).
+    // Sub-pixel: the centroid of the blob's area near the peak. A pixel counts by how far it differs
+    // from the ring's mean colour towards the blob's (a stripe of another colour beside it does not
+    // pull): nothing below a quarter of the blob's contrast (fur texture), fully from three quarters
+    // (a pixel at the edge by the share it covers). Not by how much more it differs: an eyeball lit
+    // from above is darker below, which pulled the centre down (on the body bench the eyes' median
+    // error went from 6.8 to 5.7 mm).
     const auto [ring_sum, ring_count] = sums.box(bx, by, ring);
     const auto [core_sum, core_count] = sums.box(bx, by, r);
     const glm::dvec3 ring_mean = (ring_sum - core_sum) / (ring_count - core_count);
@@ -133,7 +136,8 @@ std::vector<BlobHit> find_eye_blobs(const FaceImage& image, glm::dvec2 centre, d
         if (!image.mask.empty() && !image.mask[p]) continue;
         const glm::dvec2 at(x + 0.5, y + 0.5);
         if (glm::distance(at, glm::dvec2(bx + 0.5, by + 0.5)) > reach_px) continue;
-        const double w = std::max(0.0, glm::dot(glm::dvec3(image.rgb[p]) - ring_mean, towards_blob) - 0.5 * peak_contrast);
+        const double towards = glm::dot(glm::dvec3(image.rgb[p]) - ring_mean, towards_blob);
+        const double w = std::clamp((towards - 0.25 * peak_contrast) / (0.5 * peak_contrast), 0.0, 1.0);
         weighted += w * at, total += w;
       }
     hits.push_back({total > 0 ? weighted / total : glm::dvec2(bx + 0.5, by + 0.5), peak_contrast, peak.roundness});

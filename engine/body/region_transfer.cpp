@@ -25,14 +25,19 @@ std::vector<std::int32_t> nearest_regions(const geometry::Mesh& target, const ge
 std::size_t pads_face_down(geometry::Mesh& mesh, const glm::dvec3& up) {
   if (mesh.regions.size() != mesh.vertex_count() || mesh.normals.size() != mesh.positions.size())
     throw InputError("pads by their normals: the mesh needs regions and normals");
-  const std::int32_t pads = region_id(Region::paw_pads), front = region_id(Region::front_paws), rear = region_id(Region::paws);
+  const std::int32_t pads = region_id(Region::paw_pads);
+  // A paw's fur, or its leg where the fit's paw took none (a short leg in long fur).
+  const auto on_the_leg = [](std::int32_t r) {
+    return r == region_id(Region::front_paws) || r == region_id(Region::paws) || r == region_id(Region::leg_front) ||
+           r == region_id(Region::leg_rear);
+  };
   const glm::dvec3 u = glm::normalize(up);
   std::vector<float> fur_xyz;
   std::vector<std::int32_t> fur_region;
   std::vector<std::size_t> sideways;
   for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
     const std::int32_t r = mesh.regions[v];
-    if (r == front || r == rear) {
+    if (on_the_leg(r)) {
       fur_xyz.insert(fur_xyz.end(), &mesh.positions[3 * v], &mesh.positions[3 * v] + 3);
       fur_region.push_back(r);
     } else if (r == pads) {

@@ -21,7 +21,7 @@ std::vector<std::int32_t> nearest_regions(const geometry::Mesh& target, const ge
 // Moved by nearest vertex onto a surface that lies off the template (M_NeuS over the paws' fur, the
 // fitted paw grown to that envelope), the template's soles also take the paws' lower sides, which
 // are fur; a vertex labelled pads that does not face down takes the region of the nearest vertex
-// labelled a paw's fur. Returns how many vertices changed. Needs normals and regions.
+// labelled a paw's fur or a leg. Returns how many vertices changed. Needs normals and regions.
 std::size_t pads_face_down(geometry::Mesh& mesh, const glm::dvec3& up);
 
 struct RegionAccuracy {

@@ -220,24 +220,25 @@ TEST_CASE("the fit finds the same labels in every world frame: rotated about eac
 }
 
 TEST_CASE("pads only where a paw faces down: the sides of a paw labelled pads by the transfer take its fur, in any frame") {
-  // Two paws (spheres 3 cm across, front and rear), labelled as a transfer from a template grown to
-  // the fur's envelope leaves them: the whole lower half pads. A z-up frame in centimetres.
+  // Three paws (spheres 3 cm across: front, rear, and a rear one whose fur the fit labelled leg, as
+  // on a short leg in long fur), labelled as a transfer from a template grown to the fur's envelope
+  // leaves them: the whole lower half pads. A z-up frame in centimetres.
   const glm::dmat4 to_world = glm::scale(glm::dmat4(1.0), glm::dvec3(100.0)) * glm::rotate(glm::dmat4(1.0), M_PI / 2, glm::dvec3(1, 0, 0));
+  const Region fur_of[3] = {Region::front_paws, Region::paws, Region::leg_rear};
   geometry::Mesh paws;
-  for (const double z : {0.3, -0.3}) {
-    geometry::Mesh one = sphere({0.0, 0.03, z}, 0.03);
+  for (const glm::dvec3 centre : {glm::dvec3(0.0, 0.03, 0.3), glm::dvec3(0.0, 0.03, -0.3), glm::dvec3(0.2, 0.03, -0.3)}) {
+    geometry::Mesh one = sphere(centre, 0.03);
     const std::uint32_t base = std::uint32_t(paws.vertex_count());
     paws.positions.insert(paws.positions.end(), one.positions.begin(), one.positions.end());
     for (const std::uint32_t i : one.triangles) paws.triangles.push_back(base + i);
   }
   paws = transformed(paws, to_world);
   const glm::dvec3 up = glm::dvec3(to_world * glm::dvec4(0, 1, 0, 0));
-  const std::size_t half = paws.vertex_count() / 2;
+  const std::size_t per_paw = paws.vertex_count() / 3;
   std::vector<double> facing(paws.vertex_count());
   for (std::size_t v = 0; v < paws.vertex_count(); ++v) {
     facing[v] = glm::dot(glm::dvec3(paws.normals[3 * v], paws.normals[3 * v + 1], paws.normals[3 * v + 2]), glm::normalize(up));
-    const Region fur = v < half ? Region::front_paws : Region::paws;
-    paws.regions.push_back(region_id(facing[v] < 0 ? Region::paw_pads : fur));
+    paws.regions.push_back(region_id(facing[v] < 0 ? Region::paw_pads : fur_of[v / per_paw]));
   }
   paws.regions[0] = region_id(Region::leg_front);  // the top of the front paw: another region, left alone
   const std::vector<std::int32_t> before = paws.regions;
@@ -249,7 +250,7 @@ TEST_CASE("pads only where a paw faces down: the sides of a paw labelled pads by
     INFO("vertex " << v << " facing " << facing[v]);
     if (before[v] != region_id(Region::paw_pads)) CHECK(paws.regions[v] == before[v]);
     else if (facing[v] < -kPadFacing) CHECK(paws.regions[v] == region_id(Region::paw_pads));
-    else CHECK(paws.regions[v] == region_id(v < half ? Region::front_paws : Region::paws));  // its own paw's fur
+    else CHECK(paws.regions[v] == region_id(fur_of[v / per_paw]));  // its own paw's fur (or leg), not another paw's
   }
   CHECK(pads_face_down(paws, up) == 0);  // nothing left to move
   geometry::Mesh bare = paws;

@@ -1,5 +1,5 @@
 // The eyes found in the photos (engine/body/photo_eyes.hpp): a blob located to a fraction of a pixel
-// under noise, by its darkness or by its colour alone, beside a larger dark distractor, the silhouette's edge refused, and
+// under noise, by its darkness or by its colour alone, at its disc's centre when shaded, beside a larger dark distractor, the silhouette's edge refused, and
 // triangulation that keeps the views that agree, drops a wrong detection, and reports its error;
 // several candidates a view (a round eye ranked above a stripe), and the two eyes chosen as mirror images.
 #include <doctest/doctest.h>
@@ -18,8 +18,9 @@ using namespace nf::body;
 
 namespace {
 
-// A light, noisy face with a dark disc (radius r, anti-aliased by 4 x 4 samples) at `eye`.
-FaceImage face_with_eye(glm::dvec2 eye, double r, unsigned seed, double noise = 0.02) {
+// A light, noisy face with a dark disc (radius r, anti-aliased by 4 x 4 samples) at `eye`; `shade`
+// darkens the disc's lower half by that much more (an eyeball lit from above).
+FaceImage face_with_eye(glm::dvec2 eye, double r, unsigned seed, double noise = 0.02, float shade = 0.0f) {
   FaceImage g;
   g.width = g.height = 64;
   g.rgb.assign(64 * 64, glm::vec3(0.6f));
@@ -27,11 +28,13 @@ FaceImage face_with_eye(glm::dvec2 eye, double r, unsigned seed, double noise = 
   std::normal_distribution<float> n(0.0f, float(noise));
   for (std::uint32_t y = 0; y < 64; ++y)
     for (std::uint32_t x = 0; x < 64; ++x) {
-      int inside = 0;
+      float dark = 0;
       for (int sy = 0; sy < 4; ++sy)
-        for (int sx = 0; sx < 4; ++sx)
-          inside += glm::distance(glm::dvec2(x + (sx + 0.5) / 4, y + (sy + 0.5) / 4), eye) < r;
-      g.rgb[y * 64 + x] = glm::vec3(0.6f - 0.35f * float(inside) / 16.0f + n(rng));
+        for (int sx = 0; sx < 4; ++sx) {
+          const glm::dvec2 at(x + (sx + 0.5) / 4, y + (sy + 0.5) / 4);
+          if (glm::distance(at, eye) < r) dark += (0.35f + (at.y > eye.y ? shade : 0.0f)) / 16.0f;
+        }
+      g.rgb[y * 64 + x] = glm::vec3(0.6f - dark + n(rng));
     }
   return g;
 }
@@ -68,6 +71,20 @@ TEST_CASE("a dark round blob is found to a fraction of a pixel, under noise, at 
       REQUIRE(hit.has_value());
       CHECK(glm::distance(hit->pixel, eye) < 0.35);
       CHECK(hit->contrast > 0.1);
+    }
+  }
+}
+
+TEST_CASE("a shaded eye (its lower half darker) is found at its disc's centre, not pulled to the shade") {
+  for (const double r : {2.0, 3.0}) {
+    for (unsigned seed = 1; seed <= 3; ++seed) {
+      CAPTURE(r);
+      CAPTURE(seed);
+      const glm::dvec2 eye(31.2 + 0.29 * seed, 30.7 - 0.17 * seed);
+      const FaceImage g = face_with_eye(eye, r, seed, 0.02, 0.2f);  // the lower half 0.55 below the face, the upper 0.35
+      const auto hit = find_eye_blob(g, eye + glm::dvec2(-3.0, 2.0), 8.0, r, 0.05);
+      REQUIRE(hit.has_value());
+      CHECK(glm::distance(hit->pixel, eye) < 0.25);
     }
   }
 }
