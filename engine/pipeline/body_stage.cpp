@@ -210,7 +210,7 @@ json BodyStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) {
   target.regions = body::nearest_regions(target, fit.fitted);
   if (target.normals.empty()) geometry::compute_vertex_normals(target);
   const std::size_t sideways_pads = body::pads_face_down(target, glm::dvec3(fit.animal_to_world[1]));
-  log::info("body: ", sideways_pads, " vertices of M_NeuS on the paws' sides took the paws' fur from the pads");
+  log::info("body: ", sideways_pads, " vertices of M_NeuS labelled pads do not face down: they take their paw's fur (or leg) instead");
   io::write_mesh_ply(out.outer_regions(), target);
   io::write_mesh_ply(out.fitted(), fit.fitted);
 
