@@ -21,11 +21,12 @@ constexpr float kDeg = 3.14159265358979f / 180.0f;
 // Shape parameters: each scales bone offsets (length) or primitive radii (girth) of one part.
 enum Shape : int {
   kTorsoLength, kTorsoGirth, kNeckLength, kNeckGirth, kHeadSize, kMuzzleLength, kMuzzleGirth,
-  kEarLength, kEarWidth, kLegLength, kLegGirth, kPawSize, kTailLength, kTailGirth, kShapeCount, kNoShape = -1,
+  kEarLength, kEarWidth, kFrontLegLength, kRearLegLength, kLegGirth, kPawSize, kTailLength, kTailGirth, kShapeCount,
+  kNoShape = -1,
 };
 const std::array<const char*, kShapeCount> kShapeNames = {
     "torso_length", "torso_girth", "neck_length", "neck_girth", "head_size", "muzzle_length", "muzzle_girth",
-    "ear_length", "ear_width", "leg_length", "leg_girth", "paw_size", "tail_length", "tail_girth"};
+    "ear_length", "ear_width", "front_leg_length", "rear_leg_length", "leg_girth", "paw_size", "tail_length", "tail_girth"};
 
 // Which part a primitive belongs to: drives the region rules.
 enum class Part { torso, neck, head, muzzle, nose, ear, eye, leg_front, leg_rear, paw_front, paw_rear, tail };
@@ -152,8 +153,11 @@ Skeleton make_skeleton(const QuadrupedProportions& p, float voxel) {
       const std::string sfx = side > 0 ? "_left" : "_right";
       const int parent = is_rear ? pelvis : chest;
       const int j0 = add_joint(s, (is_rear ? "hip" : "shoulder") + sfx, parent, top, kTorsoGirth);
-      const int j1 = add_joint(s, (is_rear ? "knee" : "elbow") + sfx, j0, mid, kLegLength);
-      const int j2 = add_joint(s, (is_rear ? "ankle" : "wrist") + sfx, j1, low, kLegLength);
+      // Front and rear legs each their own length: animals differ in how they stand (a hyena's
+      // sloping back, a rabbit's long hind legs), and one shared length cost the paws' labels.
+      const int length_shape = is_rear ? kRearLegLength : kFrontLegLength;
+      const int j1 = add_joint(s, (is_rear ? "knee" : "elbow") + sfx, j0, mid, length_shape);
+      const int j2 = add_joint(s, (is_rear ? "ankle" : "wrist") + sfx, j1, low, length_shape);
       const Part leg = is_rear ? Part::leg_rear : Part::leg_front;
       const float r_mid = 0.5f * (p.leg_radius_top + p.leg_radius_bottom);
       prims.push_back(cone(leg, j0, j1, p.leg_radius_top, r_mid, kLegGirth, 0.6f * p.leg_radius_top));

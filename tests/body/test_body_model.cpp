@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <tuple>
 
 #include "engine/body/body_model.hpp"
 #include "engine/body/quadruped.hpp"
@@ -148,6 +149,35 @@ TEST_CASE("blend shapes are exact and move the part they name") {
       back_move += glm::distance(at(vg, i), at(m.template_vertices, i)), ++back;
   CHECK(back > 0);
   CHECK(back_move / back < 2e-3 * animal_proportions("cat").torso_length);  // soft weights: a trace
+}
+
+TEST_CASE("front and rear legs lengthen apart") {
+  // Animals differ in how their front and rear legs compare (a hyena, a rabbit): each pair has its
+  // own length, which moves its paws along the leg and leaves the other pair where it was.
+  const BodyModel& m = model_of("cat");
+  const auto index_of = [&](const std::string& name) {
+    const auto it = std::find(m.shape_names.begin(), m.shape_names.end(), name);
+    REQUIRE(it != m.shape_names.end());
+    return std::size_t(it - m.shape_names.begin());
+  };
+  CHECK(std::find(m.shape_names.begin(), m.shape_names.end(), "leg_length") == m.shape_names.end());
+  const auto j0 = shaped_joints(m, {});
+  for (const auto& [shape, moved, kept] : {std::tuple{"rear_leg_length", "ankle", "wrist"}, std::tuple{"front_leg_length", "wrist", "ankle"}}) {
+    CAPTURE(shape);
+    std::vector<float> beta(m.shape_count(), 0.0f);
+    beta[index_of(shape)] = 0.3f;
+    const auto j1 = shaped_joints(m, beta);
+    for (const char* side : {"_left", "_right"}) {
+      const int paw = m.joint_index(std::string(moved) + side), other = m.joint_index(std::string(kept) + side);
+      const int top = m.parents[std::size_t(m.parents[std::size_t(paw)])];  // hip or shoulder
+      REQUIRE(paw >= 0);
+      REQUIRE(other >= 0);
+      REQUIRE(top >= 0);
+      const glm::vec3 expected = j0[top] + 1.3f * (j0[paw] - j0[top]);
+      CHECK(glm::distance(j1[paw], expected) < 1e-5f);
+      CHECK(glm::distance(j1[other], j0[other]) < 1e-7f);
+    }
+  }
 }
 
 TEST_CASE("skinning: turning the head moves the face rigidly and leaves the rump alone") {
