@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <tuple>
 
 #include "engine/body/body_model.hpp"
 #include "engine/body/quadruped.hpp"
@@ -162,16 +161,17 @@ TEST_CASE("front and rear legs lengthen apart") {
   };
   CHECK(std::find(m.shape_names.begin(), m.shape_names.end(), "leg_length") == m.shape_names.end());
   const auto j0 = shaped_joints(m, {});
-  for (const auto& [shape, moved, kept] : {std::tuple{"rear_leg_length", "ankle", "wrist"}, std::tuple{"front_leg_length", "wrist", "ankle"}}) {
-    CAPTURE(shape);
+  struct Case { const char *shape, *moved, *kept; };  // the paw joint it moves, the one it keeps
+  for (const Case& c : {Case{"rear_leg_length", "ankle", "wrist"}, Case{"front_leg_length", "wrist", "ankle"}}) {
+    CAPTURE(c.shape);
     std::vector<float> beta(m.shape_count(), 0.0f);
-    beta[index_of(shape)] = 0.3f;
+    beta[index_of(c.shape)] = 0.3f;
     const auto j1 = shaped_joints(m, beta);
     for (const char* side : {"_left", "_right"}) {
-      const int paw = m.joint_index(std::string(moved) + side), other = m.joint_index(std::string(kept) + side);
-      const int top = m.parents[std::size_t(m.parents[std::size_t(paw)])];  // hip or shoulder
+      const int paw = m.joint_index(std::string(c.moved) + side), other = m.joint_index(std::string(c.kept) + side);
       REQUIRE(paw >= 0);
       REQUIRE(other >= 0);
+      const int top = m.parents[std::size_t(m.parents[std::size_t(paw)])];  // hip or shoulder
       REQUIRE(top >= 0);
       const glm::vec3 expected = j0[top] + 1.3f * (j0[paw] - j0[top]);
       CHECK(glm::distance(j1[paw], expected) < 1e-5f);
