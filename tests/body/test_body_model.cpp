@@ -31,6 +31,13 @@ const BodyModel& model_of(const std::string& animal) {
 
 glm::vec3 at(const std::vector<float>& xyz, std::size_t i) { return {xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]}; }
 
+// The index of the shape coefficient `name`; fails the test when the model has none.
+std::size_t shape_index(const BodyModel& m, const std::string& name) {
+  const auto it = std::find(m.shape_names.begin(), m.shape_names.end(), name);
+  REQUIRE(it != m.shape_names.end());
+  return std::size_t(it - m.shape_names.begin());
+}
+
 std::map<Region, int> region_counts(const BodyModel& m) {
   std::map<Region, int> counts;
   for (std::int32_t r : m.regions) ++counts[static_cast<Region>(r)];
@@ -109,11 +116,7 @@ TEST_CASE("blend shapes are exact and move the part they name") {
   const geometry::Mesh rest = pose_body_animal_frame(m, BodyParams{});
   for (std::size_t i = 0; i < 3 * n; ++i) REQUIRE(std::fabs(rest.positions[i] - m.template_vertices[i]) < 1e-5f);
 
-  const auto index_of = [&](const std::string& name) {
-    const auto it = std::find(m.shape_names.begin(), m.shape_names.end(), name);
-    REQUIRE(it != m.shape_names.end());
-    return std::size_t(it - m.shape_names.begin());
-  };
+  const auto index_of = [&](const std::string& name) { return shape_index(m, name); };
   // Tail length +50%: the tail tip joint moves by half the tail vector, the head stays.
   std::vector<float> beta(m.shape_count(), 0.0f);
   beta[index_of("tail_length")] = 0.5f;
@@ -154,11 +157,7 @@ TEST_CASE("front and rear legs lengthen apart") {
   // Animals differ in how their front and rear legs compare (a hyena, a rabbit): each pair has its
   // own length, which moves its paws along the leg and leaves the other pair where it was.
   const BodyModel& m = model_of("cat");
-  const auto index_of = [&](const std::string& name) {
-    const auto it = std::find(m.shape_names.begin(), m.shape_names.end(), name);
-    REQUIRE(it != m.shape_names.end());
-    return std::size_t(it - m.shape_names.begin());
-  };
+  const auto index_of = [&](const std::string& name) { return shape_index(m, name); };
   CHECK(std::find(m.shape_names.begin(), m.shape_names.end(), "leg_length") == m.shape_names.end());
   const auto j0 = shaped_joints(m, {});
   struct Case { const char *shape, *moved, *kept; };  // the paw joint it moves, the one it keeps
