@@ -1,5 +1,5 @@
 #pragma once
-// `nf_gpu bench --suite body`: the body stage on synthetic animals (cat, dog, fox, panda, tiger and lion, two seeds each, drawn wider than their
+// `nf_gpu bench --suite body`: the body stage on synthetic animals (cat, dog, fox, panda, tiger and lion, three seeds each, none shared, drawn wider than their
 // families: proportions within 25 %, fur lengths within 40 % of the preset the knowledge is given),
 // from the NeuS mesh the pipeline itself produces: label accuracy against the ground truth,
 // per-region recall, eye-centre error, chamfer after each fitting stage, and time per stage; then
