@@ -116,10 +116,9 @@ TEST_CASE("blend shapes are exact and move the part they name") {
   const geometry::Mesh rest = pose_body_animal_frame(m, BodyParams{});
   for (std::size_t i = 0; i < 3 * n; ++i) REQUIRE(std::fabs(rest.positions[i] - m.template_vertices[i]) < 1e-5f);
 
-  const auto index_of = [&](const std::string& name) { return shape_index(m, name); };
   // Tail length +50%: the tail tip joint moves by half the tail vector, the head stays.
   std::vector<float> beta(m.shape_count(), 0.0f);
-  beta[index_of("tail_length")] = 0.5f;
+  beta[shape_index(m, "tail_length")] = 0.5f;
   const auto j0 = shaped_joints(m, {}), j1 = shaped_joints(m, beta);
   const int tip = m.joint_index("tail_4"), root = m.joint_index("tail_0"), head = m.joint_index("head");
   const glm::vec3 expected = j0[tip] + 0.5f * (j0[tip] - j0[root]);
@@ -137,12 +136,12 @@ TEST_CASE("blend shapes are exact and move the part they name") {
   CHECK(tail_move / tail > 0.1 * animal_proportions("cat").tail_length);
   // Linear: twice the parameter, twice the displacement.
   std::vector<float> beta2 = beta;
-  beta2[index_of("tail_length")] = 1.0f;
+  beta2[shape_index(m, "tail_length")] = 1.0f;
   const auto v2 = shaped_vertices(m, beta2);
   for (std::size_t i = 0; i < 3 * n; ++i) REQUIRE(std::fabs((v2[i] - m.template_vertices[i]) - 2 * (v1[i] - m.template_vertices[i])) < 1e-5f);
   // Leg girth widens the legs about their axes: leg vertices move, the back does not.
   std::vector<float> girth(m.shape_count(), 0.0f);
-  girth[index_of("leg_girth")] = 0.3f;
+  girth[shape_index(m, "leg_girth")] = 0.3f;
   const auto vg = shaped_vertices(m, girth);
   double back_move = 0;
   int back = 0;
@@ -157,14 +156,13 @@ TEST_CASE("front and rear legs lengthen apart") {
   // Animals differ in how their front and rear legs compare (a hyena, a rabbit): each pair has its
   // own length, which moves its paws along the leg and leaves the other pair where it was.
   const BodyModel& m = model_of("cat");
-  const auto index_of = [&](const std::string& name) { return shape_index(m, name); };
   CHECK(std::find(m.shape_names.begin(), m.shape_names.end(), "leg_length") == m.shape_names.end());
   const auto j0 = shaped_joints(m, {});
   struct Case { const char *shape, *moved, *kept; };  // the paw joint it moves, the one it keeps
   for (const Case& c : {Case{"rear_leg_length", "ankle", "wrist"}, Case{"front_leg_length", "wrist", "ankle"}}) {
     CAPTURE(c.shape);
     std::vector<float> beta(m.shape_count(), 0.0f);
-    beta[index_of(c.shape)] = 0.3f;
+    beta[shape_index(m, c.shape)] = 0.3f;
     const auto j1 = shaped_joints(m, beta);
     for (const char* side : {"_left", "_right"}) {
       const int paw = m.joint_index(std::string(c.moved) + side), other = m.joint_index(std::string(c.kept) + side);
