@@ -136,7 +136,8 @@ EyeCentres eye_centres(const BodyModel& model, const BodyParams& params) {
   for (std::size_t i = 0; i < posed.vertex_count(); ++i) {
     if (model.regions.empty() || model.regions[i] != region_id(Region::eyes)) continue;
     const glm::vec3 p(posed.positions[3 * i], posed.positions[3 * i + 1], posed.positions[3 * i + 2]);
-    const int side = p.x >= 0 ? 0 : 1;
+    // The side from the rest pose: a turned head carries both eyes across the posed body's middle.
+    const int side = model.template_vertices[3 * i] >= 0 ? 0 : 1;
     sum[side] += p, ++count[side];
   }
   if (count[0] == 0 || count[1] == 0)

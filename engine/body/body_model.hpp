@@ -60,8 +60,8 @@ geometry::Mesh pose_body(const BodyModel& model, const BodyParams& params);
 // The same in the animal frame (no world placement), for rules that need the animal's axes.
 geometry::Mesh pose_body_animal_frame(const BodyModel& model, const BodyParams& params);
 
-// Eye centres: the mean of the eye-region vertices on each side (+x left, -x right) of the posed
-// body in the animal frame, mapped to the world. Throws when a side has no eye vertices.
+// Eye centres: the mean of each eye's region vertices on the posed body (an eye's side, +x left and
+// -x right, taken in the rest pose), mapped to the world. Throws when a side has no eye vertices.
 struct EyeCentres {
   glm::vec3 left, right;
   float distance() const { return glm::distance(left, right); }
