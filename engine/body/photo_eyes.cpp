@@ -61,6 +61,9 @@ FaceImage face_image_of(const io::Camera& camera) {
 
 }  // namespace
 
+// How far the blob's centre may follow its centroid: each step moves it at most the window's reach.
+constexpr int kMeanShiftSteps = 8;
+
 std::vector<BlobHit> find_eye_blobs(const FaceImage& image, glm::dvec2 centre, double search_radius, double radius,
                                     double min_contrast, std::size_t max_count) {
   const int r = std::max(1, int(std::lround(radius))), ring = 2 * r;
@@ -127,20 +130,36 @@ std::vector<BlobHit> find_eye_blobs(const FaceImage& image, glm::dvec2 centre, d
     const glm::dvec3 ring_mean = (ring_sum - core_sum) / (ring_count - core_count);
     const glm::dvec3 towards_blob = (core_sum / core_count - ring_mean) / peak_contrast;
     const double reach_px = 1.5 * radius + 0.5;
-    glm::dvec2 weighted(0.0);
-    double total = 0;
-    for (int y = by - r - 1; y <= by + r + 1; ++y)
-      for (int x = bx - r - 1; x <= bx + r + 1; ++x) {
-        if (x < 0 || y < 0 || x >= int(image.width) || y >= int(image.height)) continue;
-        const std::size_t p = std::size_t(y) * image.width + std::size_t(x);
-        if (!image.mask.empty() && !image.mask[p]) continue;
-        const glm::dvec2 at(x + 0.5, y + 0.5);
-        if (glm::distance(at, glm::dvec2(bx + 0.5, by + 0.5)) > reach_px) continue;
-        const double towards = glm::dot(glm::dvec3(image.rgb[p]) - ring_mean, towards_blob);
-        const double w = std::clamp((towards - 0.25 * peak_contrast) / (0.5 * peak_contrast), 0.0, 1.0);
-        weighted += w * at, total += w;
-      }
-    hits.push_back({total > 0 ? weighted / total : glm::dvec2(bx + 0.5, by + 0.5), peak_contrast, peak.roundness});
+    const auto centroid_near = [&](glm::dvec2 c) -> std::optional<glm::dvec2> {
+      glm::dvec2 weighted(0.0);
+      double total = 0;
+      const int x0 = int(std::floor(c.x - reach_px)), x1 = int(std::ceil(c.x + reach_px));
+      const int y0 = int(std::floor(c.y - reach_px)), y1 = int(std::ceil(c.y + reach_px));
+      for (int y = std::max(0, y0); y <= std::min(int(image.height) - 1, y1); ++y)
+        for (int x = std::max(0, x0); x <= std::min(int(image.width) - 1, x1); ++x) {
+          const std::size_t p = std::size_t(y) * image.width + std::size_t(x);
+          if (!image.mask.empty() && !image.mask[p]) continue;
+          const glm::dvec2 at(x + 0.5, y + 0.5);
+          if (glm::distance(at, c) > reach_px) continue;
+          const double towards = glm::dot(glm::dvec3(image.rgb[p]) - ring_mean, towards_blob);
+          const double w = std::clamp((towards - 0.25 * peak_contrast) / (0.5 * peak_contrast), 0.0, 1.0);
+          weighted += w * at, total += w;
+        }
+      if (total <= 0) return std::nullopt;
+      return weighted / total;
+    };
+    // Mean shift: the window follows its centroid. An eye wider than the filter (an individual's,
+    // not the template's) leaves the contrast flat across its disc, so the peak may sit at its rim,
+    // and one centroid round the peak stays on that side of the disc.
+    glm::dvec2 centre_px(bx + 0.5, by + 0.5);
+    for (int iteration = 0; iteration < kMeanShiftSteps; ++iteration) {
+      const std::optional<glm::dvec2> next = centroid_near(centre_px);
+      if (!next) break;
+      const double moved = glm::distance(*next, centre_px);
+      centre_px = *next;
+      if (moved < 0.01) break;
+    }
+    hits.push_back({centre_px, peak_contrast, peak.roundness});
   }
   return hits;
 }

@@ -1,5 +1,6 @@
 // The eyes found in the photos (engine/body/photo_eyes.hpp): a blob located to a fraction of a pixel
-// under noise, by its darkness or by its colour alone, at its disc's centre when shaded, beside a larger dark distractor, the silhouette's edge refused, and
+// under noise, by its darkness or by its colour alone, at its disc's centre when shaded or wider than
+// the filter, beside a larger dark distractor, the silhouette's edge refused, and
 // triangulation that keeps the views that agree, drops a wrong detection, and reports its error;
 // several candidates a view (a round eye ranked above a stripe), and the two eyes chosen as mirror images.
 #include <doctest/doctest.h>
@@ -85,6 +86,21 @@ TEST_CASE("a shaded eye (its lower half darker) is found at its disc's centre, n
       const auto hit = find_eye_blob(g, eye + glm::dvec2(-3.0, 2.0), 8.0, r, 0.05);
       REQUIRE(hit.has_value());
       CHECK(glm::distance(hit->pixel, eye) < 0.25);
+    }
+  }
+}
+
+TEST_CASE("an eye larger than the filter (an individual's, not the template's) is found at its disc's centre") {
+  for (const double scale : {1.3, 1.6}) {
+    for (unsigned seed = 1; seed <= 3; ++seed) {
+      CAPTURE(scale);
+      CAPTURE(seed);
+      const double filter = 2.5, r = scale * filter;
+      const glm::dvec2 eye(31.4 + 0.31 * seed, 30.2 - 0.23 * seed);
+      const FaceImage g = face_with_eye(eye, r, seed, 0.02, 0.1f);  // shaded: the plateau's peak lies off the centre
+      const auto hit = find_eye_blob(g, eye + glm::dvec2(3.0, -2.0), 10.0, filter, 0.05);
+      REQUIRE(hit.has_value());
+      CHECK(glm::distance(hit->pixel, eye) < 0.35);
     }
   }
 }
