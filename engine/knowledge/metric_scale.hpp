@@ -18,8 +18,9 @@ namespace nf::knowledge {
 // How far each cue may be off, relative (one standard deviation of its log). The eyes: an
 // individual's eye distance differs from its kind's by about 10 %, and the fitted template's eyes
 // of animals nf_gpu never made were 20-40 % too far apart (issue 42's measurements). Eyes
-// triangulated in the photos are 5.8 % off their true distance (RMS over the body bench's twelve
-// animals at 256 px), so what their spread must cover is the individual: 10 % or more from its
+// triangulated in the photos are within 12 % of their true distance on 16 of the body bench's
+// eighteen bodies at 256 px (17 % RMS: a face the fit missed, a stripe taken for an eye), so what
+// their spread must also cover is the individual: 10 % or more from its
 // kind (the bench's animals, drawn 25 % from their families, were up to 47 % off, and a spread of
 // 12 % took the combined scale from 14 % to 19 % RMS there). The body length: adults of a kind
 // differ by about 15 %, and a fit's skeleton follows the surface to a few percent.
