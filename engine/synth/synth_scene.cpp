@@ -19,6 +19,7 @@
 #include "engine/geometry/mesh_tools.hpp"
 #include "engine/io/image.hpp"
 #include "engine/io/jpeg_exif.hpp"
+#include "engine/io/json_fields.hpp"
 #include "engine/io/mesh.hpp"
 #include "engine/io/scene.hpp"
 #include "engine/io/strand_files.hpp"
@@ -250,6 +251,7 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
   for (std::size_t j = 0; j < model.joint_count(); ++j) rotations[model.joint_names[j]] = json_vec3(params.joint_rotations[j]);
   json info{
       {"generator", "nf_gpu synth"},
+      {"truth_version", kTruthVersion},
       {"animal", o.animal},
       {"seed", o.seed},
       {"frame", frame.name},
@@ -282,6 +284,13 @@ json synthesize_scene(const fs::path& requested_out, const SynthOptions& o) {
   if (fs::exists(out_dir)) fs::remove_all(out_dir);
   fs::rename(out, out_dir);
   return info;
+}
+
+bool truth_is_current(const fs::path& scene) {
+  const fs::path file = scene / "gt" / "scene.json";
+  if (!fs::exists(file)) return false;
+  const json info = io::read_json_file(file);
+  return info.is_object() && info.value("generator", "") == "nf_gpu synth" && info.value("truth_version", 1) == kTruthVersion;
 }
 
 }  // namespace nf::synth

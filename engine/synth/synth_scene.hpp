@@ -62,4 +62,11 @@ struct SynthOptions {
 // it is an earlier synth output and `overwrite` is set; user files are never replaced.
 json synthesize_scene(const std::filesystem::path& out, const SynthOptions& options);
 
+// The version of the truth synth writes (gt/scene.json "truth_version"): raised when a true value
+// was wrong, so that a cached scene made before is made again. 2: each eye's centre from its own
+// vertices (a turned head had mixed them).
+inline constexpr int kTruthVersion = 2;
+// Whether `scene` holds a synth scene whose truth is of kTruthVersion.
+bool truth_is_current(const std::filesystem::path& scene);
+
 }  // namespace nf::synth

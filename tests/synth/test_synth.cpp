@@ -234,6 +234,15 @@ TEST_CASE("a written synthetic scene: files, ground truth, and roots inside the 
     const glm::vec3 left(info["eye_centres"]["left"][0], info["eye_centres"]["left"][1], info["eye_centres"]["left"][2]);
     const glm::vec3 right(info["eye_centres"]["right"][0], info["eye_centres"]["right"][1], info["eye_centres"]["right"][2]);
     CHECK(k.eye_distance_cm == doctest::Approx(100 * glm::distance(left, right)).epsilon(1e-4));
+    // The truth's version: a cached scene made by an earlier synth with a wrong truth is not current.
+    CHECK(info["truth_version"] == synth::kTruthVersion);
+    CHECK(synth::truth_is_current(out));
+    json older = info;
+    older.erase("truth_version");
+    std::ofstream(out / "gt" / "scene.json") << older.dump(2);
+    CHECK(!synth::truth_is_current(out));
+    CHECK(!synth::truth_is_current(root / "nothing here"));
+    std::ofstream(out / "gt" / "scene.json") << info.dump(2);
 
     // Each region's thickness is the grown fur's: the median distance from the region's body
     // vertices to the envelope. Checked independently through the envelope's nearest vertex, which
