@@ -148,9 +148,9 @@ std::vector<BlobHit> find_eye_blobs(const FaceImage& image, glm::dvec2 centre, d
       if (total <= 0) return std::nullopt;
       return weighted / total;
     };
-    // Mean shift: the window follows its centroid. An eye wider than the filter (an individual's,
-    // not the template's) leaves the contrast flat across its disc, so the peak may sit at its rim,
-    // and one centroid round the peak stays on that side of the disc.
+    // Mean shift: the window follows its centroid. The filter's peak can sit off the eye's centre
+    // (fur across the eye, an eye wider than the template's), and one centroid round the peak stays
+    // on its side: following it took the body bench's per-eye error's median from 6.2 to 5.2 mm.
     glm::dvec2 centre_px(bx + 0.5, by + 0.5);
     for (int iteration = 0; iteration < kMeanShiftSteps; ++iteration) {
       const std::optional<glm::dvec2> next = centroid_near(centre_px);

@@ -290,7 +290,8 @@ bool truth_is_current(const fs::path& scene) {
   const fs::path file = scene / "gt" / "scene.json";
   if (!fs::exists(file)) return false;
   const json info = io::read_json_file(file);
-  return info.is_object() && info.value("generator", "") == "nf_gpu synth" && info.value("truth_version", 1) == kTruthVersion;
+  if (!info.is_object() || !info.contains("truth_version") || !info["truth_version"].is_number_integer()) return false;
+  return info.value("generator", json()) == "nf_gpu synth" && info["truth_version"].get<int>() == kTruthVersion;
 }
 
 }  // namespace nf::synth

@@ -97,7 +97,7 @@ TEST_CASE("an eye larger than the filter (an individual's, not the template's) i
       CAPTURE(seed);
       const double filter = 2.5, r = scale * filter;
       const glm::dvec2 eye(31.4 + 0.31 * seed, 30.2 - 0.23 * seed);
-      const FaceImage g = face_with_eye(eye, r, seed, 0.02, 0.1f);  // shaded: the plateau's peak lies off the centre
+      const FaceImage g = face_with_eye(eye, r, seed, 0.02, 0.1f);  // shaded, lower half darker
       const auto hit = find_eye_blob(g, eye + glm::dvec2(3.0, -2.0), 10.0, filter, 0.05);
       REQUIRE(hit.has_value());
       CHECK(glm::distance(hit->pixel, eye) < 0.35);
