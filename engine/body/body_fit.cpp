@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "engine/body/fit_regularisers.hpp"
 #include "engine/body/posing.hpp"
@@ -159,6 +160,32 @@ class Fitter {
       free_.push_back(turns_freely);
       limits_.push_back(turns_freely ? std::max(o.max_joint_angle, 2.8) : o.max_joint_angle);
     }
+    const auto shape = [&](const char* name) -> std::optional<std::size_t> {
+      const auto it = std::find(model.shape_names.begin(), model.shape_names.end(), name);
+      if (it == model.shape_names.end()) return std::nullopt;
+      return layout_.shape_begin() + std::size_t(it - model.shape_names.begin());
+    };
+    torso_length_ = shape("torso_length"), torso_girth_ = shape("torso_girth");
+  }
+
+  // Keeps the torso's length over its girth (1 + beta each) at least min_torso_aspect of the
+  // template's, moving both coefficients alike in log space. Returns whether it had to.
+  bool bound_torso(std::vector<double>& x) const {
+    if (!torso_length_ || !torso_girth_ || o_.min_torso_aspect <= 0) return false;
+    double& length = x[*torso_length_];
+    double& girth = x[*torso_girth_];
+    const double floor = std::log(o_.min_torso_aspect), aspect = std::log1p(length) - std::log1p(girth);
+    if (!(aspect < floor)) return false;  // within the bound (or a NaN, which the loss reports)
+    const double half = 0.5 * (floor - aspect);
+    length = (1.0 + length) * std::exp(half) - 1.0;
+    girth = (1.0 + girth) * std::exp(-half) - 1.0;
+    return true;
+  }
+  // Within 2 % of the bound: the chamfer presses the torso against it, and the last Adam step may
+  // leave it a little inside.
+  bool torso_at_bound(const std::vector<double>& x) const {
+    if (!torso_length_ || !torso_girth_ || o_.min_torso_aspect <= 0) return false;
+    return std::log1p(x[*torso_length_]) - std::log1p(x[*torso_girth_]) <= std::log(o_.min_torso_aspect) + 0.02;
   }
 
   struct StepResult {
@@ -280,6 +307,7 @@ class Fitter {
   MeshTopology topology_;
   std::vector<double> limits_;  // per joint, radians
   std::vector<bool> free_;      // per joint: ears and the tail's root turn freely
+  std::optional<std::size_t> torso_length_, torso_girth_;  // their places in the variables
 };
 
 enum Active : unsigned { kGlobal = 1, kShapePose = 2, kOffsets = 4 };
@@ -312,6 +340,7 @@ FitStageReport run_stage(const Fitter& fitter, std::vector<double>& x, const std
     report.chamfer_end = r.chamfer, report.loss_end = r.loss;
     const double decay = 1.0 - 0.9 * double(k) / double(std::max<std::uint32_t>(1, steps));
     nn::adam_step_ref(x, grad, state, config, groups, decay);
+    if (active & kShapePose) fitter.bound_torso(x);
   }
   {  // the chamfer after the last step (or of the start, for a stage of 0 steps)
     const Fitter::StepResult r = fitter.evaluate(x, grad, step_counter++, priors, regularise);
@@ -472,6 +501,7 @@ BodyFit fit_body(const BodyModel& model, const geometry::Mesh& world_target, con
   stages.push_back(run_stage(fitter, best, "shape_pose", o.pose_steps, kGlobal | kShapePose, o, step));
   stages.push_back(run_stage(fitter, best, "offsets", o.offset_steps, kGlobal | kShapePose | kOffsets, o, step));
   BodyFit fit = finish(model, target, L, std::move(best), std::move(stages), std::move(hypotheses));
+  fit.torso_at_bound = fitter.torso_at_bound(fit.variables);
   for (FitStageReport& r : fit.stages) r.chamfer_start *= target.radius, r.chamfer_end *= target.radius;
   return fit;
 }
@@ -495,6 +525,7 @@ BodyFit refit_body(const BodyModel& model, const geometry::Mesh& world_target, c
   stages.push_back(run_stage(fitter, x, "shape_pose", o.pose_steps / 2, kGlobal | kShapePose, o, step));
   stages.push_back(run_stage(fitter, x, "offsets", o.offset_steps, kGlobal | kShapePose | kOffsets, o, step));
   BodyFit fit = finish(model, target, fitter.layout(), std::move(x), std::move(stages), json::array());
+  fit.torso_at_bound = fitter.torso_at_bound(fit.variables);
   for (FitStageReport& r : fit.stages) r.chamfer_start *= target.radius, r.chamfer_end *= target.radius;
   return fit;
 }

@@ -42,6 +42,12 @@ struct BodyFitOptions {
   std::uint32_t global_steps = 120, pose_steps = 250, offset_steps = 120;
   double global_lr = 0.02, pose_lr = 0.01, shape_lr = 0.03, offset_lr = 0.002;
   double max_joint_angle = 1.2;  // radians; ear joints may fold to 2.8
+  // The torso's length over its girth kept at least this share of the template's (models with
+  // `torso_length` and `torso_girth` shapes; 0: unbounded). Fur that makes an animal a round blob
+  // let the fit trade the torso's length for girth until the neck took the chest and the body the
+  // legs (a panda's torso shrank to 29 % of its length and grew 73 % in girth; labels 54 %); the
+  // families' own torsos lie at 0.78-1.16 of the template's aspect.
+  double min_torso_aspect = 0.5;
   BodyFitWeights weights;
   unsigned seed = 1;
 };
@@ -69,6 +75,7 @@ struct BodyFit {
   double chamfer_mean = 0;              // final mean two-way distance, world units
   double relative_chamfer = 0;          // chamfer_mean / the target's RMS radius
   bool low_confidence = false;          // relative_chamfer above what a quadruped fit reaches
+  bool torso_at_bound = false;          // the torso's aspect ended at min_torso_aspect: the surface is rounder than a body
 };
 
 // Throws InputError naming `source` when the target has no faces, NaN vertices or no area.

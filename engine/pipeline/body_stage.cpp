@@ -27,7 +27,7 @@ namespace {
 
 constexpr int kStageVersion = 10;  // 2: fit.json; 3: the head-and-body length; 4: the eyes from the photos; 5: the tail's pitch tried; 6: several blobs a view, round ones first, the eyes a mirrored pair;
                                   // 7: pads only where M_NeuS faces down; 8: an eye's centre from its blob's area, not its darkness; 9: front and rear legs their own length;
-                                  // 10: the eye blob's centre by mean shift
+                                  // 10: the eye blob's centre by mean shift, the torso's aspect bounded
 
 // The cameras' mean up vector when they agree on one (a capture rig's usual case).
 body::FrameHints frame_hints(const io::Scene& scene) {
@@ -266,12 +266,17 @@ json BodyStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) {
                                        {"hypotheses", fit.hypotheses},
                                        {"chamfer_mean", fit.chamfer_mean},
                                        {"relative_chamfer", fit.relative_chamfer},
-                                       {"low_confidence", fit.low_confidence}}
+                                       {"low_confidence", fit.low_confidence},
+                                       {"torso_at_bound", fit.torso_at_bound}}
                                       .dump(2) + "\n");
   if (fit.low_confidence)
     log::warn("body: low confidence: the fitted body stays ", 100.0 * fit.relative_chamfer, " % of the surface's radius "
               "from it on average (good quadruped fits stay below 5 %); is the subject a four-legged animal? Region labels "
               "are likely wrong on much of the surface");
+  else if (fit.torso_at_bound)
+    log::warn("body: the surface is rounder than a quadruped's body (long fur?): the fitted torso's length over its girth "
+              "stopped at body.min_torso_aspect = ", s.fit.min_torso_aspect, " of the template's; region labels may be off "
+              "where the legs and neck meet the body (check body/previews)");
 
   const auto t1 = std::chrono::steady_clock::now();
   const std::vector<fs::path> previews =
@@ -284,6 +289,7 @@ json BodyStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) {
                {"chamfer_mean", fit.chamfer_mean},
                {"relative_chamfer", fit.relative_chamfer},
                {"low_confidence", fit.low_confidence},
+               {"torso_at_bound", fit.torso_at_bound},
                {"eye_distance", glm::distance(eyes.left, eyes.right)},
                {"eyes_from", eyes.record["source"]},
                {"eye_seconds", eye_seconds},
@@ -332,6 +338,8 @@ const SettingsSchema<BodySettings>& body_settings() {
              "sum of squared shape coefficients")
         .add("max_joint_angle", [](B& b) -> auto& { return b.fit.max_joint_angle; }, 0.01, 3.2,
              "joint limit in radians")
+        .add("min_torso_aspect", [](B& b) -> auto& { return b.fit.min_torso_aspect; }, 0, 1,
+             "the torso's length over its girth kept at least this share of the template's (0: unbounded)")
         .add("seed", [](B& b) -> auto& { return b.fit.seed; }, 0, 4294967295.0, "sampling seed")
         .add("preview_views", [](B& b) -> auto& { return b.preview_views; }, 0, 16, "region-coloured preview renders")
         .add("photo_eyes", [](B& b) -> auto& { return b.photo_eyes; }, 0, 1,

@@ -4,6 +4,7 @@
 // input (no faces, NaN, several blobs, a sphere).
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -310,6 +311,35 @@ TEST_CASE("bad input: no faces, NaN, several blobs are refused by name; a sphere
   const BodyFit ball = fit_body(model, sphere({3, 4, 5}, 0.2), FrameHints{glm::dvec3(0, 1, 0)}, o, "ball.ply");
   CHECK(ball.low_confidence);
   CHECK(std::isfinite(ball.chamfer_mean));
+}
+
+TEST_CASE("a round blob (an animal in long fur) does not collapse the torso: its length over its girth is bounded") {
+  const BodyModel& model = coarse_cat();
+  BodyFitOptions o = quick_fit();
+  o.pose_steps = 60, o.offset_steps = 0;
+  const auto aspect = [&](const BodyFit& fit) {
+    const PoseLayout layout = PoseLayout::of(model, true);
+    const auto at = [&](const char* name) {
+      const auto it = std::find(model.shape_names.begin(), model.shape_names.end(), name);
+      REQUIRE(it != model.shape_names.end());
+      return fit.variables[layout.shape_begin() + std::size_t(it - model.shape_names.begin())];
+    };
+    return (1.0 + at("torso_length")) / (1.0 + at("torso_girth"));
+  };
+  const geometry::Mesh ball = sphere({0.1, 0.2, -0.3}, 0.18);  // about the cat's length across
+  o.min_torso_aspect = 0;
+  const BodyFit free = fit_body(model, ball, FrameHints{glm::dvec3(0, 1, 0)}, o, "ball.ply");
+  o.min_torso_aspect = 0.5;
+  const BodyFit bounded = fit_body(model, ball, FrameHints{glm::dvec3(0, 1, 0)}, o, "ball.ply");
+  CAPTURE(aspect(free));
+  CAPTURE(aspect(bounded));
+  CHECK(aspect(free) < 0.45);  // unbounded, the torso trades its length for girth
+  CHECK(!free.torso_at_bound);
+  CHECK(aspect(bounded) >= 0.5 - 1e-6);
+  CHECK(bounded.torso_at_bound);
+  // A body-shaped surface stays clear of the bound.
+  const BodyFit dog = fit_body(model, target_animal(), FrameHints{glm::dvec3(0, 1, 0)}, o, "dog.ply");
+  CHECK(!dog.torso_at_bound);
 }
 
 TEST_CASE("refit to a thinner surface (as M_bald after defurring) starts from the first fit and gets closer") {
