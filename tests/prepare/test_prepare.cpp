@@ -532,8 +532,10 @@ TEST_CASE("prepare --known-distance: two points picked in the photos set the uni
   const double expected = 100.0 * compare(prepared, f.truth, f.root / "truth").scale;
   MESSAGE("known distance ", true_cm, " cm: ", *prepared.cm_per_unit, " cm per unit against ", expected, "; ", report["known_distance"].dump());
   CHECK(*prepared.cm_per_unit == doctest::Approx(expected).epsilon(0.02));
+  // The picks meet where the truth's cameras put them, to COLMAP's pose error: its runs differ
+  // (threads), and a pick's error was 0.5-2.8 px across runs; beyond 8 px the stage refuses it.
   for (const json& p : report["known_distance"]["points"])
-    for (const auto& [photo, error] : p["reprojection_px"].items()) CHECK(error.get<double>() < 2.0);
+    for (const auto& [photo, error] : p["reprojection_px"].items()) CHECK(error.get<double>() < 4.0);
 
   // A pick 40 px off (upwards: across the epipolar lines of cameras on a circle) is named, with its
   // photo; nothing is written.
