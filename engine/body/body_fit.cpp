@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <utility>
 
 #include "engine/body/fit_regularisers.hpp"
 #include "engine/body/posing.hpp"
@@ -160,32 +161,25 @@ class Fitter {
       free_.push_back(turns_freely);
       limits_.push_back(turns_freely ? std::max(o.max_joint_angle, 2.8) : o.max_joint_angle);
     }
-    const auto shape = [&](const char* name) -> std::optional<std::size_t> {
-      const auto it = std::find(model.shape_names.begin(), model.shape_names.end(), name);
-      if (it == model.shape_names.end()) return std::nullopt;
-      return layout_.shape_begin() + std::size_t(it - model.shape_names.begin());
-    };
-    torso_length_ = shape("torso_length"), torso_girth_ = shape("torso_girth");
+    const int length = model.shape_index("torso_length"), girth = model.shape_index("torso_girth");
+    if (length >= 0 && girth >= 0 && o.min_torso_aspect > 0)
+      torso_ = {layout_.shape_begin() + std::size_t(length), layout_.shape_begin() + std::size_t(girth)};
   }
 
   // Keeps the torso's length over its girth (1 + beta each) at least min_torso_aspect of the
-  // template's, moving both coefficients alike in log space. Returns whether it had to.
-  bool bound_torso(std::vector<double>& x) const {
-    if (!torso_length_ || !torso_girth_ || o_.min_torso_aspect <= 0) return false;
-    double& length = x[*torso_length_];
-    double& girth = x[*torso_girth_];
-    const double floor = std::log(o_.min_torso_aspect), aspect = std::log1p(length) - std::log1p(girth);
-    if (!(aspect < floor)) return false;  // within the bound (or a NaN, which the loss reports)
-    const double half = 0.5 * (floor - aspect);
-    length = (1.0 + length) * std::exp(half) - 1.0;
-    girth = (1.0 + girth) * std::exp(-half) - 1.0;
-    return true;
+  // template's, moving both coefficients alike in log space.
+  void bound_torso(std::vector<double>& x) const {
+    const std::optional<double> excess = torso_excess(x);
+    if (!excess || !(*excess < 0)) return;  // within the bound (or a NaN, which the loss reports)
+    const double half = -0.5 * *excess;
+    x[torso_->first] = (1.0 + x[torso_->first]) * std::exp(half) - 1.0;
+    x[torso_->second] = (1.0 + x[torso_->second]) * std::exp(-half) - 1.0;
   }
   // Within 2 % of the bound: the chamfer presses the torso against it, and the last Adam step may
   // leave it a little inside.
   bool torso_at_bound(const std::vector<double>& x) const {
-    if (!torso_length_ || !torso_girth_ || o_.min_torso_aspect <= 0) return false;
-    return std::log1p(x[*torso_length_]) - std::log1p(x[*torso_girth_]) <= std::log(o_.min_torso_aspect) + 0.02;
+    const std::optional<double> excess = torso_excess(x);
+    return excess && *excess <= 0.02;
   }
 
   struct StepResult {
@@ -307,7 +301,13 @@ class Fitter {
   MeshTopology topology_;
   std::vector<double> limits_;  // per joint, radians
   std::vector<bool> free_;      // per joint: ears and the tail's root turn freely
-  std::optional<std::size_t> torso_length_, torso_girth_;  // their places in the variables
+  std::optional<std::pair<std::size_t, std::size_t>> torso_;  // the torso's length and girth in the variables, when bounded
+
+  // The torso's log aspect above the bound's; none when the model or the options have no bound.
+  std::optional<double> torso_excess(const std::vector<double>& x) const {
+    if (!torso_) return std::nullopt;
+    return std::log1p(x[torso_->first]) - std::log1p(x[torso_->second]) - std::log(o_.min_torso_aspect);
+  }
 };
 
 enum Active : unsigned { kGlobal = 1, kShapePose = 2, kOffsets = 4 };

@@ -16,6 +16,12 @@ int BodyModel::joint_index(const std::string& joint) const {
   return -1;
 }
 
+int BodyModel::shape_index(const std::string& shape) const {
+  for (std::size_t s = 0; s < shape_names.size(); ++s)
+    if (shape_names[s] == shape) return int(s);
+  return -1;
+}
+
 void BodyModel::validate(const std::string& source) const {
   const std::size_t v = vertex_count(), j = joint_count(), s = shape_count();
   auto fail = [&](const std::string& what) { throw InputError(source + ": " + what); };

@@ -37,6 +37,7 @@ struct BodyModel {
   std::size_t joint_count() const { return joint_names.size(); }
   std::size_t shape_count() const { return shape_names.size(); }
   int joint_index(const std::string& name) const;  // -1 when absent
+  int shape_index(const std::string& name) const;  // -1 when absent
   // Throws InputError naming `source` and the inconsistent field.
   void validate(const std::string& source) const;
 };

@@ -4,7 +4,6 @@
 // input (no faces, NaN, several blobs, a sphere).
 #include <doctest/doctest.h>
 
-#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -320,9 +319,9 @@ TEST_CASE("a round blob (an animal in long fur) does not collapse the torso: its
   const auto aspect = [&](const BodyFit& fit) {
     const PoseLayout layout = PoseLayout::of(model, true);
     const auto at = [&](const char* name) {
-      const auto it = std::find(model.shape_names.begin(), model.shape_names.end(), name);
-      REQUIRE(it != model.shape_names.end());
-      return fit.variables[layout.shape_begin() + std::size_t(it - model.shape_names.begin())];
+      const int s = model.shape_index(name);
+      REQUIRE(s >= 0);
+      return fit.variables[layout.shape_begin() + std::size_t(s)];
     };
     return (1.0 + at("torso_length")) / (1.0 + at("torso_girth"));
   };

@@ -33,9 +33,9 @@ glm::vec3 at(const std::vector<float>& xyz, std::size_t i) { return {xyz[3 * i],
 
 // The index of the shape coefficient `name`; fails the test when the model has none.
 std::size_t shape_index(const BodyModel& m, const std::string& name) {
-  const auto it = std::find(m.shape_names.begin(), m.shape_names.end(), name);
-  REQUIRE(it != m.shape_names.end());
-  return std::size_t(it - m.shape_names.begin());
+  const int s = m.shape_index(name);
+  REQUIRE(s >= 0);
+  return std::size_t(s);
 }
 
 std::map<Region, int> region_counts(const BodyModel& m) {
@@ -177,6 +177,7 @@ TEST_CASE("front and rear legs lengthen apart") {
   // own length, which moves its paws along the leg and leaves the other pair where it was.
   const BodyModel& m = model_of("cat");
   CHECK(std::find(m.shape_names.begin(), m.shape_names.end(), "leg_length") == m.shape_names.end());
+  CHECK(m.shape_index("leg_length") == -1);
   const auto j0 = shaped_joints(m, {});
   struct Case { const char *shape, *moved, *kept; };  // the paw joint it moves, the one it keeps
   for (const Case& c : {Case{"rear_leg_length", "ankle", "wrist"}, Case{"front_leg_length", "wrist", "ankle"}}) {
