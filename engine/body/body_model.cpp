@@ -48,6 +48,12 @@ void BodyModel::validate(const std::string& source) const {
   }
   if (!regions.empty() && regions.size() != v) fail("regions: expected one per vertex");
   for (std::int32_t r : regions) region_name(r, source + ": regions");
+  const RegionDetail& d = region_detail;
+  if (d.barycentric.size() != 3 * d.size() || d.regions.size() != d.size())
+    fail("region_detail: expected a face, three barycentric weights and a region per point");
+  for (std::uint32_t f : d.faces)
+    if (f >= triangles.size() / 3) fail("region_detail: face " + std::to_string(f) + " >= face count " + std::to_string(triangles.size() / 3));
+  for (std::int32_t r : d.regions) region_name(r, source + ": region_detail");
   for (float x : template_vertices)
     if (!std::isfinite(x)) fail("template_vertices: NaN or Inf coordinate");
 }

@@ -19,6 +19,17 @@ namespace nf::body {
 
 inline constexpr int kSkinInfluences = 4;
 
+// Regions finer than the model's mesh: points on its triangles (a face and barycentric weights
+// each) with their regions. The procedural family labels a finer build of itself this way, so a
+// coarse template's small regions (eyes, inner ears, nose tip, pads) keep their size wherever a fit
+// takes its triangles. Empty for SMAL files, whose regions are per vertex.
+struct RegionDetail {
+  std::vector<std::uint32_t> faces;     // N
+  std::vector<float> barycentric;       // N x 3
+  std::vector<std::int32_t> regions;    // N, ids of regions.hpp
+  std::size_t size() const { return faces.size(); }
+};
+
 struct BodyModel {
   std::string name;
   std::vector<float> template_vertices;  // V x 3
@@ -32,6 +43,7 @@ struct BodyModel {
   std::vector<std::uint32_t> skin_joints;  // V x 4
   std::vector<float> skin_weights;         // V x 4, each row sums to 1
   std::vector<std::int32_t> regions;       // V, ids of regions.hpp
+  RegionDetail region_detail;              // optional
 
   std::size_t vertex_count() const { return template_vertices.size() / 3; }
   std::size_t joint_count() const { return joint_names.size(); }

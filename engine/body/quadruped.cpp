@@ -86,7 +86,7 @@ float ellipsoid_exit(glm::vec3 dir, glm::vec3 radii) {
   return 1.0f / std::sqrt(glm::dot(q, q));
 }
 
-Skeleton make_skeleton(const QuadrupedProportions& p, float voxel) {
+Skeleton make_skeleton(const QuadrupedProportions& p, float min_thickness) {
   Skeleton s;
   const float half = 0.5f * p.torso_length;
   const float h_front = p.front_leg_length, h_rear = p.rear_leg_length;
@@ -124,7 +124,7 @@ Skeleton make_skeleton(const QuadrupedProportions& p, float voxel) {
     prims.push_back(ellipsoid(Part::eye, head, offset, kHeadSize, glm::vec3(p.eye_radius), kHeadSize, 0.0f));
   }
   // Ears: pointed slabs of constant thickness on top of the head; droop turns them out and down.
-  const float ear_half = 0.5f * std::max(p.ear_thickness, 2.5f * voxel);
+  const float ear_half = 0.5f * std::max(p.ear_thickness, min_thickness);
   for (float side : {1.0f, -1.0f}) {
     const glm::vec3 base_dir = glm::normalize(glm::vec3(0.55f * side, 0.8f, -0.1f));
     const glm::vec3 base = head_p + (ellipsoid_exit(base_dir, head_radii) - 0.25f * p.ear_width) * base_dir;
@@ -376,7 +376,7 @@ QuadrupedProportions vary_proportions(const QuadrupedProportions& p, unsigned se
 
 BodyModel build_quadruped(const QuadrupedProportions& p, const QuadrupedBuildOptions& options) {
   const float voxel = options.voxel > 0 ? options.voxel : p.torso_length / 110.0f;
-  const Skeleton s = make_skeleton(p, voxel);
+  const Skeleton s = make_skeleton(p, options.min_thickness > 0 ? options.min_thickness : 2.5f * voxel);
   const geometry::Mesh mesh = extract_surface(s, voxel);
   if (mesh.vertex_count() == 0) throw InternalError("quadruped '" + p.animal + "': the body surface is empty");
 

@@ -48,6 +48,9 @@ QuadrupedProportions vary_proportions(const QuadrupedProportions& p, unsigned se
 
 struct QuadrupedBuildOptions {
   float voxel = 0.0f;  // marching-cubes voxel in metres; 0: torso_length / 110
+  // The thinnest a slab part (the ears) may be, in metres, so marching cubes sees both its sides;
+  // 0: 2.5 voxels. A finer build of a template sets the template's, so their surfaces agree.
+  float min_thickness = 0.0f;
 };
 
 BodyModel build_quadruped(const QuadrupedProportions& p, const QuadrupedBuildOptions& options = {});

@@ -8,6 +8,7 @@
 #include "engine/core/parallel.hpp"
 #include "engine/geometry/mesh_tools.hpp"
 #include "engine/geometry/point_index.hpp"
+#include "engine/geometry/surface_locator.hpp"
 
 namespace nf::body {
 
@@ -20,6 +21,43 @@ std::vector<std::int32_t> nearest_regions(const geometry::Mesh& target, const ge
     for (std::size_t i = b; i < e; ++i) out[i] = labelled.regions[index.nearest(&target.positions[3 * i]).first];
   });
   return out;
+}
+
+RegionDetail attach_region_detail(const BodyModel& model, const geometry::Mesh& fine) {
+  if (fine.regions.size() != fine.vertex_count()) throw InternalError("region detail: the finer surface has no regions");
+  geometry::Mesh rest;
+  rest.positions = model.template_vertices;
+  rest.triangles = model.triangles;
+  const geometry::SurfaceLocator locator(rest);
+  RegionDetail d;
+  d.faces.resize(fine.vertex_count());
+  d.barycentric.resize(3 * fine.vertex_count());
+  d.regions = fine.regions;
+  parallel_for(fine.vertex_count(), [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) {
+      const geometry::SurfaceHit hit = locator.closest(fine.position(i));
+      d.faces[i] = hit.face;
+      for (int k = 0; k < 3; ++k) d.barycentric[3 * i + k] = hit.barycentric[k];
+    }
+  });
+  return d;
+}
+
+geometry::Mesh region_carrier(const BodyModel& model, const geometry::Mesh& posed) {
+  const RegionDetail& d = model.region_detail;
+  if (d.size() == 0) return posed;
+  if (posed.vertex_count() != model.vertex_count())
+    throw InternalError("region detail: the posed body has " + std::to_string(posed.vertex_count()) + " vertices, the model " +
+                        std::to_string(model.vertex_count()));
+  geometry::Mesh points;
+  points.positions.resize(3 * d.size());
+  points.regions = d.regions;
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    glm::vec3 p(0.0f);
+    for (int k = 0; k < 3; ++k) p += d.barycentric[3 * i + k] * posed.position(model.triangles[3 * d.faces[i] + k]);
+    for (int k = 0; k < 3; ++k) points.positions[3 * i + k] = p[k];
+  }
+  return points;
 }
 
 std::size_t pads_face_down(geometry::Mesh& mesh, const glm::dvec3& up) {

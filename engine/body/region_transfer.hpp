@@ -7,6 +7,7 @@
 
 #include <glm/glm.hpp>
 
+#include "engine/body/body_model.hpp"
 #include "engine/body/regions.hpp"
 #include "engine/core/json.hpp"
 #include "engine/geometry/mesh.hpp"
@@ -15,6 +16,15 @@ namespace nf::body {
 
 // The region of the nearest vertex of `labelled` for every vertex of `target`.
 std::vector<std::int32_t> nearest_regions(const geometry::Mesh& target, const geometry::Mesh& labelled);
+
+// `fine` (a finer build of `model`'s rest surface, in its frame, with regions) attached to the
+// model's rest triangles: each vertex at its closest point.
+RegionDetail attach_region_detail(const BodyModel& model, const geometry::Mesh& fine);
+
+// What labels a surface fitted by `model`: its region detail placed on `posed` (the model's
+// triangles posed, e.g. BodyFit::fitted) as a point set with regions, or `posed` itself when the
+// model has no detail. For nearest_regions.
+geometry::Mesh region_carrier(const BodyModel& model, const geometry::Mesh& posed);
 
 // The pads are where a paw faces the ground: the template's own rule (a paw's vertex whose normal
 // lies within 53 degrees of down) applied to `mesh`'s normals, `up` the animal's up in its frame.

@@ -25,9 +25,9 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 10;  // 2: fit.json; 3: the head-and-body length; 4: the eyes from the photos; 5: the tail's pitch tried; 6: several blobs a view, round ones first, the eyes a mirrored pair;
+constexpr int kStageVersion = 11;  // 2: fit.json; 3: the head-and-body length; 4: the eyes from the photos; 5: the tail's pitch tried; 6: several blobs a view, round ones first, the eyes a mirrored pair;
                                   // 7: pads only where M_NeuS faces down; 8: an eye's centre from its blob's area, not its darkness; 9: front and rear legs their own length;
-                                  // 10: the eye blob's centre by mean shift, the torso's aspect bounded
+                                  // 10: the eye blob's centre by mean shift, the torso's aspect bounded; 11: labels from the template's finer build
 
 // The cameras' mean up vector when they agree on one (a capture rig's usual case).
 body::FrameHints frame_hints(const io::Scene& scene) {
@@ -208,7 +208,7 @@ json BodyStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) {
   for (const body::FitStageReport& r : fit.stages)
     log::info("body: stage ", r.name, ": chamfer ", r.chamfer_start, " -> ", r.chamfer_end, " scene units in ", r.seconds, " s");
 
-  target.regions = body::nearest_regions(target, fit.fitted);
+  target.regions = body::nearest_regions(target, body::region_carrier(model, fit.fitted));
   if (target.normals.empty()) geometry::compute_vertex_normals(target);
   const std::size_t sideways_pads = body::pads_face_down(target, glm::dvec3(fit.animal_to_world[1]));
   log::info("body: ", sideways_pads, " vertices of M_NeuS labelled pads do not face down: they take their paw's fur (or leg) instead");

@@ -28,7 +28,7 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 3;  // 2: the knowledge's mane labelled on M_NeuS and M_bald; 3: pads only where M_bald faces down
+constexpr int kStageVersion = 4;  // 2: the knowledge's mane labelled on M_NeuS and M_bald; 3: pads only where M_bald faces down; 4: M_bald labelled from the template's finer build
 
 // The bald body's grid for the penetration loss: spacing half the fur's median thickness, so a
 // strand point sunk by a fraction of the fur layer is resolved, within 64..256 samples along the
@@ -165,7 +165,7 @@ json DefurStage::run(StageContext& c, const fs::path& out_dir, const fs::path&) 
   json refit_summary;
   if (s.refit) {
     const body::BodyFit refit = body::refit_body(model, bald, fit, b.fit, out.bald().string());
-    bald.regions = body::nearest_regions(bald, refit.fitted);
+    bald.regions = body::nearest_regions(bald, body::region_carrier(model, refit.fitted));
     if (has_mane) mane["bald"] = body::to_json(label_mane_from_fit(model, refit, refit.fitted, bald, out.refit().string()));
     io::write_mesh_ply(out.refit(), refit.fitted);
     refit_summary = {{"chamfer_mean", refit.chamfer_mean}, {"relative_chamfer", refit.relative_chamfer},
