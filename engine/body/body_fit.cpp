@@ -545,10 +545,27 @@ std::vector<glm::dvec3> fitted_joints(const BodyModel& model, const BodyFit& fit
 FittedEyes fitted_eyes(const BodyModel& model, const BodyFit& fit) {
   glm::dvec3 sum[2]{glm::dvec3(0.0), glm::dvec3(0.0)};
   int count[2]{0, 0};
-  for (std::size_t i = 0; i < model.vertex_count(); ++i) {
-    if (model.regions.empty() || model.regions[i] != region_id(Region::eyes)) continue;
-    const int side = model.template_vertices[3 * i] >= 0 ? 0 : 1;  // in the rest pose, +x is the animal's left
-    sum[side] += at(fit.fitted.positions, i), ++count[side];
+  const std::int32_t eyes = region_id(Region::eyes);
+  const RegionDetail& detail = model.region_detail;
+  if (detail.size() > 0) {  // the finer build's eye, as the truth of a synth scene is measured
+    for (std::size_t i = 0; i < detail.size(); ++i) {
+      if (detail.regions[i] != eyes) continue;
+      double rest_x = 0;
+      glm::dvec3 posed(0.0);
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t v = model.triangles[3 * detail.faces[i] + std::size_t(k)];
+        rest_x += detail.barycentric[3 * i + std::size_t(k)] * model.template_vertices[3 * v];
+        posed += double(detail.barycentric[3 * i + std::size_t(k)]) * at(fit.fitted.positions, v);
+      }
+      const int side = rest_x >= 0 ? 0 : 1;  // in the rest pose, +x is the animal's left
+      sum[side] += posed, ++count[side];
+    }
+  } else {
+    for (std::size_t i = 0; i < model.vertex_count(); ++i) {
+      if (model.regions.empty() || model.regions[i] != eyes) continue;
+      const int side = model.template_vertices[3 * i] >= 0 ? 0 : 1;
+      sum[side] += at(fit.fitted.positions, i), ++count[side];
+    }
   }
   if (count[0] == 0 || count[1] == 0)
     throw InputError((model.name.empty() ? std::string("body model") : model.name) + ": no eye-region vertices on the " +

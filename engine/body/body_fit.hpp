@@ -90,7 +90,8 @@ BodyFit refit_body(const BodyModel& model, const geometry::Mesh& target, const B
 // The fit's joint positions, world, in the model's joint order.
 std::vector<glm::dvec3> fitted_joints(const BodyModel& model, const BodyFit& fit);
 
-// Eye centres (world) of a fit: the mean of the eye-region vertices on each side of the animal.
+// Eye centres (world) of a fit: the mean of the eye region on each side of the animal (its points in
+// the model's region detail, else its vertices).
 struct FittedEyes {
   glm::dvec3 left, right;
 };

@@ -25,9 +25,9 @@ namespace nf::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kStageVersion = 11;  // 2: fit.json; 3: the head-and-body length; 4: the eyes from the photos; 5: the tail's pitch tried; 6: several blobs a view, round ones first, the eyes a mirrored pair;
+constexpr int kStageVersion = 12;  // 2: fit.json; 3: the head-and-body length; 4: the eyes from the photos; 5: the tail's pitch tried; 6: several blobs a view, round ones first, the eyes a mirrored pair;
                                   // 7: pads only where M_NeuS faces down; 8: an eye's centre from its blob's area, not its darkness; 9: front and rear legs their own length;
-                                  // 10: the eye blob's centre by mean shift, the torso's aspect bounded; 11: labels from the template's finer build
+                                  // 10: the eye blob's centre by mean shift, the torso's aspect bounded; 11: labels from the template's finer build; 12: the fit's eyes from it too
 
 // The cameras' mean up vector when they agree on one (a capture rig's usual case).
 body::FrameHints frame_hints(const io::Scene& scene) {
