@@ -543,29 +543,15 @@ std::vector<glm::dvec3> fitted_joints(const BodyModel& model, const BodyFit& fit
 }
 
 FittedEyes fitted_eyes(const BodyModel& model, const BodyFit& fit) {
+  // The region detail's eye where the model has one, as the truth of a synth scene is measured
+  // (the mean of a fine build's eye); the side is taken in the rest pose, +x the animal's left.
+  const geometry::Mesh rest = region_carrier(model, rest_mesh(model)), posed = region_carrier(model, fit.fitted);
   glm::dvec3 sum[2]{glm::dvec3(0.0), glm::dvec3(0.0)};
   int count[2]{0, 0};
-  const std::int32_t eyes = region_id(Region::eyes);
-  const RegionDetail& detail = model.region_detail;
-  if (detail.size() > 0) {  // the finer build's eye, as the truth of a synth scene is measured
-    for (std::size_t i = 0; i < detail.size(); ++i) {
-      if (detail.regions[i] != eyes) continue;
-      double rest_x = 0;
-      glm::dvec3 posed(0.0);
-      for (int k = 0; k < 3; ++k) {
-        const std::uint32_t v = model.triangles[3 * detail.faces[i] + std::size_t(k)];
-        rest_x += detail.barycentric[3 * i + std::size_t(k)] * model.template_vertices[3 * v];
-        posed += double(detail.barycentric[3 * i + std::size_t(k)]) * at(fit.fitted.positions, v);
-      }
-      const int side = rest_x >= 0 ? 0 : 1;  // in the rest pose, +x is the animal's left
-      sum[side] += posed, ++count[side];
-    }
-  } else {
-    for (std::size_t i = 0; i < model.vertex_count(); ++i) {
-      if (model.regions.empty() || model.regions[i] != eyes) continue;
-      const int side = model.template_vertices[3 * i] >= 0 ? 0 : 1;
-      sum[side] += at(fit.fitted.positions, i), ++count[side];
-    }
+  for (std::size_t i = 0; i < rest.regions.size(); ++i) {
+    if (rest.regions[i] != region_id(Region::eyes)) continue;
+    const int side = rest.positions[3 * i] >= 0 ? 0 : 1;
+    sum[side] += at(posed.positions, i), ++count[side];
   }
   if (count[0] == 0 || count[1] == 0)
     throw InputError((model.name.empty() ? std::string("body model") : model.name) + ": no eye-region vertices on the " +
@@ -609,12 +595,7 @@ BodyModel default_template() {
   QuadrupedBuildOptions fine_build;
   fine_build.voxel = build.voxel / 3.0f;
   fine_build.min_thickness = 2.5f * build.voxel;  // the template's ears, not thinner ones
-  const BodyModel fine = build_quadruped(mean, fine_build);
-  geometry::Mesh fine_rest;
-  fine_rest.positions = fine.template_vertices;
-  fine_rest.triangles = fine.triangles;
-  fine_rest.regions = fine.regions;
-  model.region_detail = attach_region_detail(model, fine_rest);
+  model.region_detail = attach_region_detail(model, rest_mesh(build_quadruped(mean, fine_build)));
   return model;
 }
 

@@ -58,6 +58,14 @@ void BodyModel::validate(const std::string& source) const {
     if (!std::isfinite(x)) fail("template_vertices: NaN or Inf coordinate");
 }
 
+geometry::Mesh rest_mesh(const BodyModel& model) {
+  geometry::Mesh mesh;
+  mesh.positions = model.template_vertices;
+  mesh.triangles = model.triangles;
+  mesh.regions = model.regions;
+  return mesh;
+}
+
 namespace {
 
 float shape_value(const std::vector<float>& shape, std::size_t s) { return s < shape.size() ? shape[s] : 0.0f; }

@@ -61,6 +61,9 @@ struct BodyParams {
   float scale = 1.0f;                        // uniform scale applied before animal_to_world
 };
 
+// The template's surface in the rest pose: its vertices, triangles and regions (no normals).
+geometry::Mesh rest_mesh(const BodyModel& model);
+
 // Joint positions after the shape blend (animal frame, rest pose).
 std::vector<glm::vec3> shaped_joints(const BodyModel& model, const std::vector<float>& shape);
 // Vertices after the shape blend (animal frame, rest pose), xyz.

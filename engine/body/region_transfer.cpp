@@ -25,9 +25,7 @@ std::vector<std::int32_t> nearest_regions(const geometry::Mesh& target, const ge
 
 RegionDetail attach_region_detail(const BodyModel& model, const geometry::Mesh& fine) {
   if (fine.regions.size() != fine.vertex_count()) throw InternalError("region detail: the finer surface has no regions");
-  geometry::Mesh rest;
-  rest.positions = model.template_vertices;
-  rest.triangles = model.triangles;
+  const geometry::Mesh rest = rest_mesh(model);
   const geometry::SurfaceLocator locator(rest);
   RegionDetail d;
   d.faces.resize(fine.vertex_count());

@@ -165,9 +165,7 @@ BodyModel load_smal_model(const std::filesystem::path& file) {
   }
 
   // Regions: the strongest joint's part, then the family's rules on normals and keypoints.
-  geometry::Mesh mesh;
-  mesh.positions = m.template_vertices;
-  mesh.triangles = m.triangles;
+  geometry::Mesh mesh = rest_mesh(m);
   geometry::compute_vertex_normals(mesh);
   const auto vertex = [&](std::size_t i) { return glm::dvec3(m.template_vertices[3 * i], m.template_vertices[3 * i + 1], m.template_vertices[3 * i + 2]); };
   const glm::dvec3 tail_root = to_animal(joint("Tail1"));

@@ -225,8 +225,7 @@ TEST_CASE("the template's regions from its finer build: on the template itself, 
   CHECK_NOTHROW(model.validate("the default template"));
   // On the rest template the detail lies where its finer build put it: the template's own vertices,
   // labelled through it, keep their labels but where a boundary runs between them.
-  geometry::Mesh rest;
-  rest.positions = model.template_vertices, rest.triangles = model.triangles, rest.regions = model.regions;
+  const geometry::Mesh rest = rest_mesh(model);
   geometry::Mesh relabelled = rest;
   relabelled.regions = nearest_regions(rest, region_carrier(model, rest));
   const RegionAccuracy at_rest = region_accuracy(relabelled, rest);
