@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <system_error>
 #include <tuple>
 
 #include "engine/core/error.hpp"
@@ -71,7 +72,9 @@ void Scene::check_files(const std::string& source) const {
   for (const Camera& c : cameras) {
     const std::string where = source + ": camera '" + c.name + "'";
     auto check = [&](const std::filesystem::path& file, const char* field) {
-      if (!std::filesystem::exists(file)) throw InputError(where + ": " + field + " " + file.string() + " does not exist");
+      std::error_code ec;  // a name the file system refuses (too long, not a path) is a bad input, not a crash
+      if (!std::filesystem::exists(file, ec))
+        throw InputError(where + ": " + field + " " + file.string() + (ec ? " cannot be read: " + ec.message() : " does not exist"));
       const std::string ext = file.extension().string();
       std::uint32_t w = 0, h = 0;
       try {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <system_error>
 #include <fstream>
 #include <sstream>
 
@@ -237,7 +238,7 @@ Scene read_scene(const fs::path& path) {
   // mask (mask_of reads the last of 2 or 4 channels).
   std::size_t from_alpha = 0;
   for (Camera& c : scene.cameras)
-    if (c.mask.empty() && fs::exists(c.image)) {
+    if (std::error_code ec; c.mask.empty() && fs::exists(c.image, ec)) {  // a bad name is reported by check_files
       const std::string ext = c.image.extension().string();
       if (ext != ".png" && ext != ".PNG") continue;
       const std::uint32_t channels = image_channels(c.image);

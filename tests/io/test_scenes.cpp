@@ -205,6 +205,11 @@ TEST_CASE("scene files: missing images, wrong sizes and masks that do not match 
   CHECK_THROWS_WITH_AS(s.check_files("scene"), doctest::Contains("does not exist"), InputError);
   std::ofstream(s.cameras[0].image) << "not a png";
   CHECK_THROWS_AS(s.check_files("scene"), InputError);
+  // A name the file system refuses (longer than a file name may be) is the camera's bad input, not
+  // a std::filesystem exception (found by fuzz_scene_text).
+  s.cameras[0].image = dir / "images" / std::string(300, 'I');
+  CHECK_THROWS_WITH_AS(s.check_files("scene"), doctest::Contains("camera 'cam0': image"), InputError);
+  CHECK_THROWS_WITH_AS(s.check_files("scene"), doctest::Contains("cannot be read"), InputError);
   fs::remove_all(dir);
 }
 
